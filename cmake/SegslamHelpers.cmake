@@ -1,0 +1,27 @@
+# segslam_add_library(NAME SRCS ... PUBLIC_LINK ... PRIVATE_LINK ...)
+# One static library per top folder; include paths are rooted at the repository so
+# headers are included as "core/camera.h".
+function(segslam_add_library NAME)
+  cmake_parse_arguments(ARG "" "" "SRCS;PUBLIC_LINK;PRIVATE_LINK" ${ARGN})
+  add_library(segslam_${NAME} STATIC ${ARG_SRCS})
+  target_include_directories(segslam_${NAME} PUBLIC ${PROJECT_SOURCE_DIR})
+  target_link_libraries(segslam_${NAME} PUBLIC ${ARG_PUBLIC_LINK} PRIVATE ${ARG_PRIVATE_LINK})
+endfunction()
+
+# segslam_add_test(NAME SRCS ... LINK ... [LABELS ...] [TIMEOUT s])
+# A GoogleTest executable whose tests are registered with CTest one by one.
+function(segslam_add_test NAME)
+  cmake_parse_arguments(ARG "" "TIMEOUT" "SRCS;LINK;LABELS" ${ARGN})
+  add_executable(${NAME} ${ARG_SRCS})
+  target_link_libraries(${NAME} PRIVATE ${ARG_LINK} GTest::gtest GTest::gtest_main)
+  target_compile_definitions(${NAME} PRIVATE
+    SEGSLAM_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
+    SEGSLAM_SHARED_DATA_DIR="${PROJECT_SOURCE_DIR}/../shared/data")
+  if(NOT ARG_TIMEOUT)
+    set(ARG_TIMEOUT 600)
+  endif()
+  gtest_discover_tests(${NAME}
+    WORKING_DIRECTORY ${PROJECT_BINARY_DIR}
+    PROPERTIES LABELS "${ARG_LABELS}" TIMEOUT ${ARG_TIMEOUT}
+    DISCOVERY_TIMEOUT 60)
+endfunction()

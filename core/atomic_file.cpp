@@ -1,0 +1,63 @@
+#include "core/atomic_file.h"
+
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "core/error.h"
+
+namespace segslam {
+
+namespace {
+
+void WriteBytesAtomically(const std::filesystem::path& path, const void* data, size_t size) {
+  // Same directory as the target, so the rename stays on one file system and is atomic;
+  // the pid keeps two processes writing the same file from sharing a temporary.
+  std::filesystem::path tmp = path;
+  tmp += ".tmp-" + std::to_string(static_cast<long>(::getpid()));
+  std::FILE* file = std::fopen(tmp.c_str(), "wb");
+  if (file == nullptr) {
+    throw FileError(path, std::string("cannot create file: ") + std::strerror(errno));
+  }
+  const size_t written = std::fwrite(data, 1, size, file);
+  int saved_errno = errno;
+  const bool write_ok = written == size;
+  const bool close_ok = std::fclose(file) == 0;
+  if (!close_ok && write_ok) saved_errno = errno;
+  if (!write_ok || !close_ok) {
+    std::remove(tmp.c_str());
+    throw FileError(path, std::string("cannot write file: ") + std::strerror(saved_errno));
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    saved_errno = errno;
+    std::remove(tmp.c_str());
+    throw FileError(path, std::string("cannot rename temporary file into place: ") +
+                              std::strerror(saved_errno));
+  }
+}
+
+}  // namespace
+
+void WriteFileAtomically(const std::filesystem::path& path, const std::string& bytes) {
+  WriteBytesAtomically(path, bytes.data(), bytes.size());
+}
+
+void WriteImageAtomically(const std::filesystem::path& path, const cv::Mat& image,
+                          const std::vector<int>& params) {
+  if (image.empty()) throw FileError(path, "refusing to write an empty image");
+  std::vector<unsigned char> buffer;
+  bool ok = false;
+  try {
+    ok = cv::imencode(path.extension().string(), image, buffer, params);
+  } catch (const cv::Exception& e) {
+    throw FileError(path, std::string("cannot encode image: ") + e.what());
+  }
+  if (!ok) throw FileError(path, "cannot encode image");
+  WriteBytesAtomically(path, buffer.data(), buffer.size());
+}
+
+}  // namespace segslam

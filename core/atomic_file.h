@@ -1,0 +1,26 @@
+// Atomic file writes: a reader (or a crashed run) never sees a half-written file under
+// the final name. The data is written to "<path>.tmp-<pid>" in the same directory and
+// then renamed over `path` (rename is atomic within one file system). No fsync: this
+// protects against crashes of the process, not against power loss.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <opencv2/core/mat.hpp>
+
+namespace segslam {
+
+// Writes `bytes` to `path` atomically, replacing an existing file. The directory must
+// exist. On failure the temporary file is removed and segslam::Error (FileError naming
+// `path` and strerror) is thrown.
+void WriteFileAtomically(const std::filesystem::path& path, const std::string& bytes);
+
+// Encodes `image` with cv::imencode using the format given by the extension of `path`
+// (".png", ".jpg", ...) and `params` (cv::IMWRITE_* pairs), then writes it atomically.
+// Throws segslam::Error if encoding or writing fails.
+void WriteImageAtomically(const std::filesystem::path& path, const cv::Mat& image,
+                          const std::vector<int>& params = {});
+
+}  // namespace segslam

@@ -1,0 +1,127 @@
+#include "core/pose.h"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+
+#include <fmt/format.h>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+
+namespace segslam {
+namespace {
+
+// Quaternion norms in TUM files deviate from 1 by the rounding of 4-7 printed digits;
+// anything beyond this is a corrupt line, not rounding.
+constexpr double kMaxQuaternionNormError = 1e-2;
+
+// Strict number parse: the whole token must be a finite number.
+bool ParseFiniteDouble(const std::string& token, double* value) {
+  if (token.empty()) return false;
+  errno = 0;
+  char* end = nullptr;
+  const double v = std::strtod(token.c_str(), &end);
+  if (end != token.c_str() + token.size() || errno == ERANGE || !std::isfinite(v)) {
+    return false;
+  }
+  *value = v;
+  return true;
+}
+
+}  // namespace
+
+std::string FormatTumPoseLine(const StampedPose& pose) {
+  Eigen::Quaterniond q(pose.T_wc.rotation());
+  q.normalize();
+  // q and -q are the same rotation; qw >= 0 makes the written line unique.
+  if (q.w() < 0) q.coeffs() *= -1.0;
+  const Eigen::Vector3d t = pose.T_wc.translation();
+  return fmt::format("{:.6f} {:.9g} {:.9g} {:.9g} {:.9f} {:.9f} {:.9f} {:.9f}", pose.stamp_s,
+                     t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w());
+}
+
+StampedPose ParseTumPoseLine(const std::string& line, const std::string& origin_for_errors) {
+  std::istringstream stream(line);
+  std::vector<std::string> tokens;
+  for (std::string token; stream >> token;) tokens.push_back(token);
+  if (tokens.size() != 8) {
+    throw Error(fmt::format(
+        "{}: expected 8 fields 'timestamp tx ty tz qx qy qz qw', found {}",
+        origin_for_errors, tokens.size()));
+  }
+  double v[8];
+  static const char* const kNames[8] = {"timestamp", "tx", "ty", "tz", "qx", "qy", "qz", "qw"};
+  for (int i = 0; i < 8; ++i) {
+    if (!ParseFiniteDouble(tokens[i], &v[i])) {
+      throw Error(fmt::format("{}: field {} ({}) is not a finite number: '{}'",
+                              origin_for_errors, i + 1, kNames[i], tokens[i]));
+    }
+  }
+  Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);
+  const double norm = q.norm();
+  if (std::abs(norm - 1.0) > kMaxQuaternionNormError) {
+    throw Error(fmt::format("{}: quaternion norm is {:.6g}, expected 1 (corrupt rotation)",
+                            origin_for_errors, norm));
+  }
+  q.normalize();
+  StampedPose pose;
+  pose.stamp_s = v[0];
+  pose.T_wc = Eigen::Isometry3d::Identity();
+  pose.T_wc.linear() = q.toRotationMatrix();
+  pose.T_wc.translation() = Eigen::Vector3d(v[1], v[2], v[3]);
+  return pose;
+}
+
+std::vector<StampedPose> ReadTumTrajectory(const std::filesystem::path& path) {
+  std::ifstream file(path);
+  if (!file) {
+    throw FileError(path, std::filesystem::exists(path) ? "cannot open file"
+                                                        : "file does not exist");
+  }
+  std::vector<StampedPose> poses;
+  std::string line;
+  for (int line_number = 1; std::getline(file, line); ++line_number) {
+    const size_t first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos || line[first] == '#') continue;
+    const std::string origin = fmt::format("{}:{}", path.string(), line_number);
+    StampedPose pose = ParseTumPoseLine(line, origin);
+    if (!poses.empty() && !(pose.stamp_s > poses.back().stamp_s)) {
+      throw Error(fmt::format("{}: timestamp {:.6f} does not increase (previous {:.6f})",
+                              origin, pose.stamp_s, poses.back().stamp_s));
+    }
+    poses.push_back(pose);
+  }
+  if (file.bad()) throw FileError(path, "read error");
+  return poses;
+}
+
+void WriteTumTrajectory(const std::filesystem::path& path,
+                        const std::vector<StampedPose>& poses,
+                        const std::string& header_comment) {
+  std::string text;
+  if (!header_comment.empty()) {
+    std::istringstream lines(header_comment);
+    for (std::string line; std::getline(lines, line);) text += "# " + line + "\n";
+  }
+  for (const StampedPose& pose : poses) {
+    text += FormatTumPoseLine(pose);
+    text += '\n';
+  }
+  WriteFileAtomically(path, text);
+}
+
+Eigen::Isometry3d InterpolatePose(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b,
+                                  double t) {
+  const Eigen::Quaterniond qa(a.rotation());
+  const Eigen::Quaterniond qb(b.rotation());
+  Eigen::Isometry3d result = Eigen::Isometry3d::Identity();
+  // Eigen's slerp takes the shorter arc (it flips qb when the dot product is negative).
+  result.linear() = qa.slerp(t, qb).normalized().toRotationMatrix();
+  result.translation() = (1.0 - t) * a.translation() + t * b.translation();
+  return result;
+}
+
+}  // namespace segslam

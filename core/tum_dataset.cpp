@@ -1,0 +1,393 @@
+#include "core/tum_dataset.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <tuple>
+
+#include <fmt/format.h>
+#include <yaml-cpp/yaml.h>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/image_io.h"
+
+namespace segslam {
+namespace {
+
+bool ParseFiniteDouble(const std::string& token, double* value) {
+  if (token.empty()) return false;
+  errno = 0;
+  char* end = nullptr;
+  const double v = std::strtod(token.c_str(), &end);
+  if (end != token.c_str() + token.size() || errno == ERANGE || !std::isfinite(v)) return false;
+  *value = v;
+  return true;
+}
+
+// Calls `on_line(tokens, origin)` for each non-comment, non-blank line of a text file.
+template <typename OnLine>
+void ForEachDataLine(const std::filesystem::path& path, OnLine on_line) {
+  std::ifstream file(path);
+  if (!file) {
+    throw FileError(path, std::filesystem::exists(path) ? "cannot open file"
+                                                        : "file does not exist");
+  }
+  std::string line;
+  for (int line_number = 1; std::getline(file, line); ++line_number) {
+    const size_t first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos || line[first] == '#') continue;
+    std::istringstream stream(line);
+    std::vector<std::string> tokens;
+    for (std::string token; stream >> token;) tokens.push_back(token);
+    on_line(tokens, fmt::format("{}:{}", path.string(), line_number));
+  }
+  if (file.bad()) throw FileError(path, "read error");
+}
+
+double ParseStamp(const std::string& token, const std::string& origin) {
+  double stamp = 0;
+  if (!ParseFiniteDouble(token, &stamp)) {
+    throw Error(fmt::format("{}: timestamp '{}' is not a finite number", origin, token));
+  }
+  return stamp;
+}
+
+const char* const kCameraKeys[] = {"width", "height", "fx", "fy", "cx", "cy", "depth_factor"};
+
+}  // namespace
+
+bool SequenceCamera::IsValid(std::string* error) const {
+  if (!intrinsics.IsValid(error)) return false;
+  if (!std::isfinite(depth_factor) || depth_factor <= 0) {
+    if (error != nullptr) *error = "depth_factor must be finite and positive";
+    return false;
+  }
+  return true;
+}
+
+SequenceCamera ReadCameraYaml(const std::filesystem::path& path) {
+  if (!std::filesystem::exists(path)) throw FileError(path, "file does not exist");
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path.string());
+  } catch (const YAML::Exception& e) {
+    throw FileError(path, std::string("malformed YAML: ") + e.what());
+  }
+  if (!root.IsMap()) throw FileError(path, "expected a map of camera keys");
+  for (const auto& item : root) {
+    const std::string key = item.first.as<std::string>();
+    if (std::find(std::begin(kCameraKeys), std::end(kCameraKeys), key) == std::end(kCameraKeys)) {
+      throw FileError(path, "unknown key '" + key +
+                                "' (expected width, height, fx, fy, cx, cy, depth_factor)");
+    }
+  }
+  auto get_double = [&](const char* key) {
+    const YAML::Node node = root[key];
+    if (!node) throw FileError(path, std::string("missing key '") + key + "'");
+    double value = 0;
+    if (!node.IsScalar() || !ParseFiniteDouble(node.Scalar(), &value)) {
+      throw FileError(path, std::string("key '") + key + "' must be a finite number");
+    }
+    return value;
+  };
+  auto get_int = [&](const char* key) {
+    const double value = get_double(key);
+    if (value != std::floor(value) || std::abs(value) > 1e9) {
+      throw FileError(path, std::string("key '") + key + "' must be an integer");
+    }
+    return static_cast<int>(value);
+  };
+  SequenceCamera camera;
+  camera.intrinsics.width = get_int("width");
+  camera.intrinsics.height = get_int("height");
+  camera.intrinsics.fx = get_double("fx");
+  camera.intrinsics.fy = get_double("fy");
+  camera.intrinsics.cx = get_double("cx");
+  camera.intrinsics.cy = get_double("cy");
+  camera.depth_factor = get_double("depth_factor");
+  std::string error;
+  if (!camera.IsValid(&error)) throw FileError(path, "invalid camera: " + error);
+  return camera;
+}
+
+void WriteCameraYaml(const std::filesystem::path& path, const SequenceCamera& camera) {
+  std::string error;
+  if (!camera.IsValid(&error)) throw FileError(path, "refusing to write invalid camera: " + error);
+  const PinholeCamera& k = camera.intrinsics;
+  // fmt's "{}" prints the shortest text that reads back to the same double.
+  const std::string text = fmt::format(
+      "# Pinhole intrinsics in pixels (OpenCV convention: pixel centres at integers).\n"
+      "# depth_factor: stored 16-bit depth value per metre (0 = no depth).\n"
+      "width: {}\nheight: {}\nfx: {}\nfy: {}\ncx: {}\ncy: {}\ndepth_factor: {}\n",
+      k.width, k.height, k.fx, k.fy, k.cx, k.cy, camera.depth_factor);
+  WriteFileAtomically(path, text);
+}
+
+std::optional<SequenceCamera> TumDefaultCamera(const std::string& sequence_name) {
+  // Published calibrations from the TUM RGB-D "file formats" page (ROS default intrinsics
+  // for freiburg3, whose images are already undistorted).
+  struct Known {
+    const char* tag;
+    double fx, fy, cx, cy;
+  };
+  static const Known kKnown[] = {{"freiburg1", 517.3, 516.5, 318.6, 255.3},
+                                 {"freiburg2", 520.9, 521.0, 325.1, 249.7},
+                                 {"freiburg3", 535.4, 539.2, 320.1, 247.6}};
+  for (const Known& known : kKnown) {
+    if (sequence_name.find(known.tag) != std::string::npos) {
+      SequenceCamera camera;
+      camera.intrinsics = {640, 480, known.fx, known.fy, known.cx, known.cy};
+      camera.depth_factor = 5000;
+      return camera;
+    }
+  }
+  return std::nullopt;
+}
+
+std::vector<TumFrameEntry> AssociateByTimestamp(
+    const std::vector<std::pair<double, std::string>>& rgb,
+    const std::vector<std::pair<double, std::string>>& depth, double max_difference_s) {
+  // associate.py forms all pairs with |a - b| < max_difference, sorts the tuples
+  // (diff, a, b) and takes each whose stamps are both unused. Sorting depth stamps lets
+  // us enumerate only the pairs inside the window instead of all N*M.
+  std::vector<size_t> depth_order(depth.size());
+  for (size_t j = 0; j < depth.size(); ++j) depth_order[j] = j;
+  std::sort(depth_order.begin(), depth_order.end(),
+            [&](size_t a, size_t b) { return depth[a].first < depth[b].first; });
+  std::vector<double> depth_sorted(depth.size());
+  for (size_t j = 0; j < depth.size(); ++j) depth_sorted[j] = depth[depth_order[j]].first;
+
+  struct Candidate {
+    double diff, a, b;
+    size_t i, j;
+  };
+  std::vector<Candidate> candidates;
+  for (size_t i = 0; i < rgb.size(); ++i) {
+    const double a = rgb[i].first;
+    auto it = std::lower_bound(depth_sorted.begin(), depth_sorted.end(), a - max_difference_s);
+    for (; it != depth_sorted.end() && *it < a + max_difference_s; ++it) {
+      const double diff = std::abs(a - *it);
+      if (diff < max_difference_s) {
+        const size_t k = static_cast<size_t>(it - depth_sorted.begin());
+        candidates.push_back({diff, a, *it, i, depth_order[k]});
+      }
+    }
+  }
+  std::sort(candidates.begin(), candidates.end(), [](const Candidate& x, const Candidate& y) {
+    return std::tie(x.diff, x.a, x.b, x.i, x.j) < std::tie(y.diff, y.a, y.b, y.i, y.j);
+  });
+  std::vector<bool> rgb_used(rgb.size(), false), depth_used(depth.size(), false);
+  std::vector<TumFrameEntry> matches;
+  for (const Candidate& c : candidates) {
+    if (rgb_used[c.i] || depth_used[c.j]) continue;
+    rgb_used[c.i] = depth_used[c.j] = true;
+    matches.push_back({rgb[c.i].first, rgb[c.i].second, depth[c.j].first, depth[c.j].second});
+  }
+  std::sort(matches.begin(), matches.end(), [](const TumFrameEntry& x, const TumFrameEntry& y) {
+    return std::tie(x.rgb_stamp_s, x.depth_stamp_s) < std::tie(y.rgb_stamp_s, y.depth_stamp_s);
+  });
+  return matches;
+}
+
+std::vector<std::pair<double, std::string>> ReadTumFileList(const std::filesystem::path& path) {
+  std::vector<std::pair<double, std::string>> list;
+  ForEachDataLine(path, [&](const std::vector<std::string>& tokens, const std::string& origin) {
+    if (tokens.size() != 2) {
+      throw Error(fmt::format("{}: expected 'timestamp filename', found {} fields", origin,
+                              tokens.size()));
+    }
+    const double stamp = ParseStamp(tokens[0], origin);
+    if (!list.empty() && !(stamp > list.back().first)) {
+      throw Error(fmt::format("{}: timestamp {} does not increase (previous {:.6f})", origin,
+                              tokens[0], list.back().first));
+    }
+    list.emplace_back(stamp, tokens[1]);
+  });
+  return list;
+}
+
+TumSequence TumSequence::Open(const std::filesystem::path& dir,
+                              std::optional<SequenceCamera> camera) {
+  std::error_code ec;
+  if (!std::filesystem::is_directory(dir, ec)) {
+    throw FileError(dir, "sequence directory does not exist");
+  }
+  TumSequence sequence;
+  sequence.dir_ = dir;
+
+  // Camera: explicit argument, then camera.yaml, then the published TUM calibration.
+  const std::filesystem::path camera_yaml = dir / "camera.yaml";
+  if (camera) {
+    std::string error;
+    if (!camera->IsValid(&error)) throw FileError(dir, "invalid camera: " + error);
+    sequence.camera_ = *camera;
+  } else if (std::filesystem::exists(camera_yaml)) {
+    sequence.camera_ = ReadCameraYaml(camera_yaml);
+  } else {
+    std::filesystem::path normal = std::filesystem::absolute(dir).lexically_normal();
+    if (normal.filename().empty()) normal = normal.parent_path();
+    const auto known = TumDefaultCamera(normal.filename().string());
+    if (!known) {
+      throw FileError(camera_yaml,
+                      "no camera intrinsics: add camera.yaml with width, height, fx, fy, cx, "
+                      "cy, depth_factor (only TUM freiburg1/2/3 sequences have defaults)");
+    }
+    sequence.camera_ = *known;
+  }
+
+  // Frames: associations.txt if present (then rgb.txt/depth.txt are not needed), else
+  // associate rgb.txt with depth.txt as TUM's associate.py does.
+  const std::filesystem::path associations = dir / "associations.txt";
+  if (std::filesystem::exists(associations)) {
+    ForEachDataLine(associations, [&](const std::vector<std::string>& tokens,
+                                      const std::string& origin) {
+      if (tokens.size() != 4) {
+        throw Error(fmt::format(
+            "{}: expected 'rgb_stamp rgb_file depth_stamp depth_file', found {} fields", origin,
+            tokens.size()));
+      }
+      TumFrameEntry entry{ParseStamp(tokens[0], origin), tokens[1],
+                          ParseStamp(tokens[2], origin), tokens[3]};
+      if (!sequence.entries_.empty() &&
+          !(entry.rgb_stamp_s > sequence.entries_.back().rgb_stamp_s)) {
+        throw Error(fmt::format("{}: rgb timestamp {} does not increase", origin, tokens[0]));
+      }
+      sequence.entries_.push_back(entry);
+    });
+  } else {
+    for (const char* list : {"rgb.txt", "depth.txt"}) {
+      if (!std::filesystem::exists(dir / list)) {
+        throw FileError(dir / list, "file list does not exist (a TUM sequence needs rgb.txt "
+                                    "and depth.txt, or associations.txt)");
+      }
+    }
+    sequence.entries_ =
+        AssociateByTimestamp(ReadTumFileList(dir / "rgb.txt"), ReadTumFileList(dir / "depth.txt"));
+  }
+  if (sequence.entries_.empty()) {
+    throw FileError(std::filesystem::exists(associations) ? associations : dir,
+                    "sequence has no frames (no rgb/depth pairs)");
+  }
+  for (const TumFrameEntry& entry : sequence.entries_) {
+    for (const std::string* file : {&entry.rgb_file, &entry.depth_file}) {
+      if (!std::filesystem::is_regular_file(dir / *file, ec)) {
+        throw FileError(dir / *file, "image file listed in the sequence does not exist");
+      }
+    }
+  }
+  const std::filesystem::path groundtruth = dir / "groundtruth.txt";
+  if (std::filesystem::exists(groundtruth)) {
+    sequence.groundtruth_ = ReadTumTrajectory(groundtruth);
+  }
+  return sequence;
+}
+
+RgbdFrame TumSequence::LoadFrame(size_t i) const {
+  if (i >= entries_.size()) {
+    throw FileError(dir_, fmt::format("frame {} out of range (sequence has {} frames)", i,
+                                      entries_.size()));
+  }
+  const TumFrameEntry& entry = entries_[i];
+  RgbdFrame frame;
+  frame.index = static_cast<int>(i);
+  frame.stamp_s = entry.rgb_stamp_s;
+  frame.color_bgr = ReadColorImage(dir_ / entry.rgb_file);
+  frame.depth_m = ReadDepthImage(dir_ / entry.depth_file, camera_.depth_factor);
+  const int w = camera_.intrinsics.width, h = camera_.intrinsics.height;
+  for (const auto& [mat, file] : {std::pair{&frame.color_bgr, &entry.rgb_file},
+                                  std::pair{&frame.depth_m, &entry.depth_file}}) {
+    if (mat->cols != w || mat->rows != h) {
+      throw FileError(dir_ / *file, fmt::format("image is {}x{}, camera expects {}x{}",
+                                                mat->cols, mat->rows, w, h));
+    }
+  }
+  return frame;
+}
+
+TumSequenceWriter::TumSequenceWriter(std::filesystem::path dir, SequenceCamera camera)
+    : dir_(std::move(dir)), camera_(camera) {
+  std::string error;
+  if (!camera_.IsValid(&error)) throw FileError(dir_, "invalid camera: " + error);
+  for (const std::filesystem::path& sub : {dir_, dir_ / "rgb", dir_ / "depth"}) {
+    std::error_code ec;
+    std::filesystem::create_directories(sub, ec);
+    if (ec || !std::filesystem::is_directory(sub)) {
+      throw FileError(sub, "cannot create directory: " + ec.message());
+    }
+  }
+}
+
+std::string TumSequenceWriter::StampName(double stamp_s) { return fmt::format("{:.6f}", stamp_s); }
+
+std::filesystem::path TumSequenceWriter::RgbPath(double stamp_s) const {
+  return dir_ / "rgb" / (StampName(stamp_s) + ".png");
+}
+
+std::filesystem::path TumSequenceWriter::DepthPath(double stamp_s) const {
+  return dir_ / "depth" / (StampName(stamp_s) + ".png");
+}
+
+void TumSequenceWriter::AddEntry(double stamp_s, const Eigen::Isometry3d& T_wc) {
+  if (finished_) throw FileError(dir_, "frame added after Finish()");
+  if (!std::isfinite(stamp_s)) throw FileError(dir_, "frame timestamp is not finite");
+  if (!T_wc.matrix().allFinite()) {
+    throw FileError(dir_, "pose of frame " + StampName(stamp_s) + " is not finite");
+  }
+  // Compare the written names: two stamps closer than 1 us would share one file.
+  if (!poses_.empty() && !(std::stod(StampName(stamp_s)) >
+                           std::stod(StampName(poses_.back().stamp_s)))) {
+    throw FileError(dir_, fmt::format("timestamp {} does not increase (previous {})",
+                                      StampName(stamp_s), StampName(poses_.back().stamp_s)));
+  }
+  poses_.push_back({stamp_s, T_wc});
+}
+
+void TumSequenceWriter::Add(const RgbdFrame& frame, const Eigen::Isometry3d& T_wc) {
+  const int w = camera_.intrinsics.width, h = camera_.intrinsics.height;
+  if (frame.color_bgr.type() != CV_8UC3 || frame.color_bgr.cols != w ||
+      frame.color_bgr.rows != h) {
+    throw FileError(RgbPath(frame.stamp_s),
+                    fmt::format("colour must be CV_8UC3 {}x{}, got {} {}x{}", w, h,
+                                CvTypeName(frame.color_bgr.type()), frame.color_bgr.cols,
+                                frame.color_bgr.rows));
+  }
+  if (frame.depth_m.type() != CV_32FC1 || frame.depth_m.cols != w || frame.depth_m.rows != h) {
+    throw FileError(DepthPath(frame.stamp_s),
+                    fmt::format("depth must be CV_32FC1 {}x{}, got {} {}x{}", w, h,
+                                CvTypeName(frame.depth_m.type()), frame.depth_m.cols,
+                                frame.depth_m.rows));
+  }
+  // Validate and record first, so a rejected frame writes nothing.
+  AddEntry(frame.stamp_s, T_wc);
+  WriteColorImage(RgbPath(frame.stamp_s), frame.color_bgr);
+  WriteDepthImage(DepthPath(frame.stamp_s), frame.depth_m, camera_.depth_factor);
+}
+
+void TumSequenceWriter::Finish() {
+  if (finished_) throw FileError(dir_, "Finish() called twice");
+  std::string rgb = "# color images\n# file: 'segslam'\n# timestamp filename\n";
+  std::string depth = "# depth maps\n# file: 'segslam'\n# timestamp filename\n";
+  std::string associations;
+  for (const StampedPose& pose : poses_) {
+    const std::string name = StampName(pose.stamp_s);
+    rgb += fmt::format("{} rgb/{}.png\n", name, name);
+    depth += fmt::format("{} depth/{}.png\n", name, name);
+    associations += fmt::format("{0} rgb/{0}.png {0} depth/{0}.png\n", name);
+  }
+  // Images were written by Add(); only now do lists name them, so an interrupted run
+  // leaves a folder that TumSequence::Open refuses rather than a short "complete" one.
+  WriteFileAtomically(dir_ / "rgb.txt", rgb);
+  WriteFileAtomically(dir_ / "depth.txt", depth);
+  WriteFileAtomically(dir_ / "associations.txt", associations);
+  WriteTumTrajectory(dir_ / "groundtruth.txt", poses_,
+                     "ground truth trajectory (camera-to-world T_wc, written by segslam)\n"
+                     "timestamp tx ty tz qx qy qz qw");
+  WriteCameraYaml(dir_ / "camera.yaml", camera_);
+  finished_ = true;
+}
+
+}  // namespace segslam

@@ -1,0 +1,138 @@
+// RGB-D sequences in the TUM RGB-D layout (Sturm et al., IROS 2012):
+//   <dir>/rgb.txt, depth.txt       "timestamp filename" lines, '#' comments
+//   <dir>/rgb/<stamp>.png          8-bit colour
+//   <dir>/depth/<stamp>.png        16-bit depth, value = metres * depth_factor, 0 = none
+//   <dir>/associations.txt         optional "rgb_stamp rgb_file depth_stamp depth_file"
+//   <dir>/groundtruth.txt          optional TUM trajectory of T_wc (pose.h)
+//   <dir>/camera.yaml              segslam's addition: intrinsics and depth factor
+// Everything read is validated at Open(); problems throw segslam::Error naming the file
+// (and line or key) and what is wrong.
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "core/camera.h"
+#include "core/frame.h"
+#include "core/pose.h"
+
+namespace segslam {
+
+struct SequenceCamera {
+  PinholeCamera intrinsics;   // Of the (registered) colour and depth images.
+  double depth_factor = 5000; // Stored depth value per metre, > 0 (5000: TUM indoors).
+
+  bool IsValid(std::string* error) const;
+};
+
+// camera.yaml with exactly the keys width, height, fx, fy, cx, cy, depth_factor.
+// Throws naming the file and key on a missing or unknown key, a wrong type, malformed
+// YAML or invalid values (see PinholeCamera::IsValid).
+SequenceCamera ReadCameraYaml(const std::filesystem::path& path);
+// Writes camera.yaml atomically; numbers are written with round-trip precision.
+void WriteCameraYaml(const std::filesystem::path& path, const SequenceCamera& camera);
+
+// The published TUM RGB-D intrinsics (640x480, depth factor 5000) if `sequence_name`
+// contains "freiburg1", "freiburg2" or "freiburg3"; std::nullopt otherwise.
+std::optional<SequenceCamera> TumDefaultCamera(const std::string& sequence_name);
+
+struct TumFrameEntry {
+  double rgb_stamp_s = 0;
+  std::string rgb_file;    // Relative to the sequence directory, e.g. "rgb/1.000000.png".
+  double depth_stamp_s = 0;
+  std::string depth_file;  // Relative to the sequence directory.
+};
+
+// TUM associate.py's greedy matching: all (rgb, depth) pairs with
+// |rgb stamp - depth stamp| < max_difference_s are sorted by that difference and taken
+// greedily when neither stamp is used yet; the result is sorted by rgb stamp.
+// (associate.py's offset is 0 here.)
+std::vector<TumFrameEntry> AssociateByTimestamp(
+    const std::vector<std::pair<double, std::string>>& rgb,
+    const std::vector<std::pair<double, std::string>>& depth,
+    double max_difference_s = 0.02);
+
+// Reads a TUM file list ("timestamp filename" per line, '#' comments, blank lines
+// skipped). Throws on a malformed line, NaN or non-increasing stamps, naming file:line.
+std::vector<std::pair<double, std::string>> ReadTumFileList(const std::filesystem::path& path);
+
+// A TUM-layout sequence opened for reading. Copyable value (holds only lists).
+class TumSequence {
+ public:
+  // Camera from `camera` if given, else <dir>/camera.yaml, else TumDefaultCamera(name of
+  // dir), else throws asking the user to add camera.yaml. Reads rgb.txt and depth.txt;
+  // frames come from associations.txt if present, else from AssociateByTimestamp.
+  // groundtruth.txt is optional. Throws on missing lists, image files listed but
+  // missing, non-increasing stamps, malformed lines, an empty sequence.
+  static TumSequence Open(const std::filesystem::path& dir,
+                          std::optional<SequenceCamera> camera = std::nullopt);
+
+  size_t size() const { return entries_.size(); }
+  const std::vector<TumFrameEntry>& entries() const { return entries_; }
+
+  // Loads frame i (0 <= i < size(), else throws): colour CV_8UC3 and depth CV_32F
+  // metres, stamp = rgb stamp. Throws naming the file if an image is unreadable, has the
+  // wrong type, or a size other than the camera's.
+  RgbdFrame LoadFrame(size_t i) const;
+
+  const SequenceCamera& camera() const { return camera_; }
+  const std::filesystem::path& dir() const { return dir_; }
+  bool has_groundtruth() const { return !groundtruth_.empty(); }
+  // T_wc poses at their own (e.g. motion-capture) stamps, not per frame.
+  const std::vector<StampedPose>& groundtruth() const { return groundtruth_; }
+
+ private:
+  std::filesystem::path dir_;
+  SequenceCamera camera_;
+  std::vector<TumFrameEntry> entries_;
+  std::vector<StampedPose> groundtruth_;
+};
+
+// Writes a sequence in the TUM layout. Add() per frame, then Finish(); until Finish()
+// there are images but no lists, so a crashed run does not look like a complete
+// sequence. Not copyable; use from one thread.
+class TumSequenceWriter {
+ public:
+  // Creates dir, dir/rgb and dir/depth (throws on failure or an invalid camera).
+  TumSequenceWriter(std::filesystem::path dir, SequenceCamera camera);
+  TumSequenceWriter(const TumSequenceWriter&) = delete;
+  TumSequenceWriter& operator=(const TumSequenceWriter&) = delete;
+  TumSequenceWriter(TumSequenceWriter&&) = default;
+  TumSequenceWriter& operator=(TumSequenceWriter&&) = default;
+
+  // Writes rgb/<StampName>.png and depth/<StampName>.png (atomically) and records the
+  // frame with its pose T_wc. Throws if the stamp does not increase, the images have the
+  // wrong type or size, or writing fails.
+  void Add(const RgbdFrame& frame, const Eigen::Isometry3d& T_wc);
+
+  // Records a frame whose images the caller writes itself (e.g. in parallel) to
+  // RgbPath(stamp_s) and DepthPath(stamp_s) before Finish(). Throws if the stamp does
+  // not increase.
+  void AddEntry(double stamp_s, const Eigen::Isometry3d& T_wc);
+
+  // Writes rgb.txt, depth.txt, associations.txt, groundtruth.txt and camera.yaml, each
+  // atomically. Throws on failure. Add() after Finish() throws.
+  void Finish();
+
+  std::filesystem::path RgbPath(double stamp_s) const;    // dir/rgb/<stamp>.png
+  std::filesystem::path DepthPath(double stamp_s) const;  // dir/depth/<stamp>.png
+  const std::filesystem::path& dir() const { return dir_; }
+  const SequenceCamera& camera() const { return camera_; }
+
+  // The stamp as written in file names and lists: "%.6f".
+  static std::string StampName(double stamp_s);
+
+ private:
+  std::filesystem::path dir_;
+  SequenceCamera camera_;
+  std::vector<StampedPose> poses_;
+  bool finished_ = false;
+};
+
+}  // namespace segslam

@@ -1,0 +1,41 @@
+#include "harness/cli.h"
+
+#include "core/error.h"
+#include "harness/commands.h"
+
+#include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
+
+#include <cstdio>
+
+namespace segslam::harness {
+
+int RunCli(int argc, char** argv) {
+  CLI::App app{
+      "segslam: a headless simulation-in-the-loop test bench for RGB-D SLAM among moving and "
+      "relocated objects"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", std::string("segslam ") + SEGSLAM_VERSION);
+
+  // Each subcommand registers its options and the action to run once parsing succeeded.
+  std::function<int()> action;
+  AddGenerateCommand(app, &action);
+  AddBenchCommand(app, &action);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  try {
+    return action ? action() : 0;
+  } catch (const Error& e) {
+    std::fprintf(stderr, "segslam: error: %s\n", e.what());
+    return 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "segslam: internal error: %s\n", e.what());
+    return 3;
+  }
+}
+
+}  // namespace segslam::harness

@@ -1,0 +1,14 @@
+// Registration of the CLI's subcommands. Each Add*Command adds its options to `app`
+// and, when its subcommand is chosen, stores the work to run in `*action`.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <functional>
+
+namespace segslam::harness {
+
+void AddGenerateCommand(CLI::App& app, std::function<int()>* action);
+void AddBenchCommand(CLI::App& app, std::function<int()>* action);
+
+}  // namespace segslam::harness

@@ -1,0 +1,91 @@
+// A scenario file (YAML) fully determines a world, its two passes and the sensor.
+// Every key has a default here; a file sets only what differs. Unknown keys and
+// out-of-range values are refused with an error naming the key and the file.
+#pragma once
+
+#include "scenes/world.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace segslam::scenes {
+
+// Sensor model applied after rendering (sim/sensor_model.h implements it).
+struct SensorSpec {
+  bool enabled = true;                 // false: perfect RGB and depth
+  double depth_noise_sigma_at_1m = 0.0015;  // metres; sigma grows with depth squared
+  double depth_quantization = 1.0;     // 1 = quantize to the disparity steps of a
+                                       // Kinect-like sensor, 0 = off
+  double max_depth_m = 0.0;            // beyond this depth is missing; 0 = kind default
+  double min_depth_m = 0.3;            // nearer than this is missing
+  double edge_dropout = 0.3;           // probability to drop depth on depth edges, [0, 1]
+  double rgb_noise_sigma = 2.0;        // 8-bit levels, Gaussian per channel
+  bool motion_blur = false;            // blur along the image motion of the camera
+  double exposure_s = 0.01;            // exposure time used for the blur
+};
+
+// The changes of pass 2 relative to pass 1.
+struct SecondPassSpec {
+  double relocated_share = 0.3;  // share of parked cars / moveable objects moved, [0, 1]
+  double removed_share = 0.1;    // share removed, [0, 1]
+  int added = 2;                 // new parked / moveable objects
+  Eigen::Vector3d camera_offset_m{0.0, 0.0, 0.0};  // offset of the route, route frame
+                                                   // (x forward, y left, z up)
+  double camera_yaw_offset_deg = 0.0;              // heading offset of the camera
+};
+
+struct CitySpec {
+  double route_length_m = 200.0;  // 160 to 400 in the paper
+  double camera_speed_mps = 6.0;
+  double camera_height_m = 1.5;
+  double block_size_m = 40.0;     // distance between street centre lines
+  double road_width_m = 10.0;
+  double sidewalk_width_m = 3.0;
+  int parked_cars = 20;
+  int moving_cars = 6;
+  double moving_car_speed_mps = 6.0;
+  int pedestrians = 10;
+  double pedestrian_speed_mps = 1.3;
+  double crossing_share = 0.3;  // share of pedestrians that cross streets
+};
+
+struct OfficeSpec {
+  std::string camera_motion = "xyz";  // xyz | static | rpy | halfsphere
+  int frames = 300;
+  double room_size_m[3] = {7.0, 6.0, 2.8};
+  int desks = 2;
+  int moveable_objects = 12;  // cups, bottles, books, laptops, chairs...
+  int people_walking = 2;
+  int people_sitting = 0;
+  double walking_speed_mps = 0.8;
+};
+
+struct Scenario {
+  std::filesystem::path source_file;  // where it was read from ("" if built in code)
+  std::string name;
+  std::string kind = "city";  // city | office
+  std::uint64_t seed = 1;
+  CameraSpec camera;
+  SensorSpec sensor;
+  SecondPassSpec pass2;
+  CitySpec city;
+  OfficeSpec office;
+  // Blocks that later layers read (e.g. `expect:` thresholds for the harness); kept
+  // verbatim so scenes/ need not know their schema.
+  YAML::Node expect;
+  std::string text;  // the file's bytes, copied into datasets as provenance
+};
+
+// Reads and validates a scenario; throws segslam::Error naming the file and the key.
+Scenario LoadScenario(const std::filesystem::path& file);
+// Same, from text; `origin` names the source in error messages.
+Scenario ParseScenario(const std::string& yaml_text, const std::string& origin);
+
+// Builds the world the scenario describes. Deterministic in scenario.seed.
+World BuildWorld(const Scenario& scenario);
+
+}  // namespace segslam::scenes

@@ -1,0 +1,404 @@
+#include "sim/dataset_generator.h"
+
+#include "core/atomic_file.h"
+#include "core/coco.h"
+#include "core/error.h"
+#include "core/image_io.h"
+#include "core/instances.h"
+#include "core/manifest.h"
+#include "core/pose.h"
+#include "core/tracks.h"
+#include "core/tum_dataset.h"
+#include "sim/sensor_model.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <deque>
+#include <future>
+#include <map>
+#include <set>
+#include <thread>
+#include <unistd.h>
+
+namespace segslam::sim {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+double SecondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// The output is assembled in a hidden sibling directory and renamed into place only
+// when complete; if anything throws, the destructor removes the partial directory.
+class StagingDirectory {
+ public:
+  StagingDirectory(fs::path target, bool overwrite) : target_(std::move(target)) {
+    if (target_.filename().empty()) target_ = target_.parent_path();
+    if (fs::exists(target_) && !overwrite) {
+      throw FileError(target_, "already exists (use --force to replace it)");
+    }
+    const fs::path parent = target_.has_parent_path() ? target_.parent_path() : fs::path(".");
+    std::error_code error;
+    fs::create_directories(parent, error);
+    if (error) throw FileError(parent, "cannot create output directory: " + error.message());
+    staging_ = parent / ("." + target_.filename().string() + ".partial-" +
+                         std::to_string(::getpid()));
+    fs::remove_all(staging_, error);
+    if (!fs::create_directory(staging_, error) || error) {
+      throw FileError(target_, "cannot write here: " +
+                                   (error ? error.message() : std::string("unknown reason")));
+    }
+  }
+  StagingDirectory(const StagingDirectory&) = delete;
+  StagingDirectory& operator=(const StagingDirectory&) = delete;
+  ~StagingDirectory() {
+    if (!committed_) {
+      std::error_code ignored;
+      fs::remove_all(staging_, ignored);
+    }
+  }
+
+  const fs::path& path() const { return staging_; }
+
+  // Moves the finished directory to its target, replacing an old one if present.
+  void Commit() {
+    std::error_code error;
+    fs::path old;
+    if (fs::exists(target_)) {
+      old = target_.parent_path() / ("." + target_.filename().string() + ".old-" +
+                                     std::to_string(::getpid()));
+      fs::rename(target_, old, error);
+      if (error) throw FileError(target_, "cannot replace: " + error.message());
+    }
+    fs::rename(staging_, target_, error);
+    if (error) throw FileError(target_, "cannot move the finished dataset here: " + error.message());
+    committed_ = true;
+    if (!old.empty()) fs::remove_all(old, error);
+  }
+
+ private:
+  fs::path target_;
+  fs::path staging_;
+  bool committed_ = false;
+};
+
+// What one frame's mask says about each instance in it.
+struct InstanceInFrame {
+  std::uint16_t id = 0;
+  int area_px = 0;
+  int x_min = 0, y_min = 0, x_max = -1, y_max = -1;
+  std::vector<int> rle_counts;  // COCO uncompressed RLE, column-major, starts with a 0-run
+};
+
+// One column-major sweep over the mask yields every instance's area, box and RLE.
+std::vector<InstanceInFrame> AnalyseMask(const cv::Mat& ids) {
+  const int rows = ids.rows, cols = ids.cols;
+  std::map<std::uint16_t, InstanceInFrame> by_id;
+  std::map<std::uint16_t, int> run_end;  // end (exclusive, column-major index) of the last 1-run
+  std::uint16_t previous = 0;
+  int run_start = 0;
+  auto close_run = [&](std::uint16_t id, int start, int end) {
+    if (id == 0) return;
+    auto& instance = by_id[id];
+    instance.id = id;
+    int& last_end = run_end[id];  // 0 when new
+    instance.rle_counts.push_back(start - last_end);
+    instance.rle_counts.push_back(end - start);
+    last_end = end;
+  };
+  for (int x = 0; x < cols; ++x) {
+    for (int y = 0; y < rows; ++y) {
+      const std::uint16_t id = ids.at<std::uint16_t>(y, x);
+      const int position = x * rows + y;
+      if (id != previous) {
+        close_run(previous, run_start, position);
+        previous = id;
+        run_start = position;
+      }
+      if (id != 0) {
+        auto& instance = by_id[id];
+        if (instance.area_px == 0) {
+          instance.x_min = instance.x_max = x;
+          instance.y_min = instance.y_max = y;
+        }
+        ++instance.area_px;
+        instance.x_min = std::min(instance.x_min, x);
+        instance.x_max = std::max(instance.x_max, x);
+        instance.y_min = std::min(instance.y_min, y);
+        instance.y_max = std::max(instance.y_max, y);
+      }
+    }
+  }
+  close_run(previous, run_start, rows * cols);
+  std::vector<InstanceInFrame> result;
+  for (auto& [id, instance] : by_id) {
+    instance.rle_counts.push_back(rows * cols - run_end[id]);
+    result.push_back(std::move(instance));
+  }
+  return result;
+}
+
+struct FrameRecord {
+  double stamp_s = 0.0;
+  Eigen::Isometry3d T_wc = Eigen::Isometry3d::Identity();
+  std::vector<InstanceInFrame> instances;
+};
+
+InstanceTable InstancesOfPass(const scenes::World& world, scenes::Pass pass) {
+  InstanceTable table;
+  for (const auto& object : world.objects) {
+    if (!object.placement[scenes::PassIndex(pass)].present) continue;
+    table.Add({object.instance_id, object.coco_category_id, object.category_name, object.moveable});
+  }
+  return table;
+}
+
+nlohmann::json CocoAnnotations(const scenes::World& world, const InstanceTable& instances,
+                               const std::vector<FrameRecord>& frames) {
+  nlohmann::json images = nlohmann::json::array();
+  nlohmann::json annotations = nlohmann::json::array();
+  std::set<int> used_categories;
+  for (const auto& info : instances.instances()) used_categories.insert(info.category_id);
+  int annotation_id = 1;
+  for (size_t i = 0; i < frames.size(); ++i) {
+    const std::string name = TumSequenceWriter::StampName(frames[i].stamp_s);
+    const int image_id = static_cast<int>(i) + 1;
+    images.push_back({{"id", image_id},
+                      {"file_name", "rgb/" + name + ".png"},
+                      {"depth_file_name", "depth/" + name + ".png"},
+                      {"mask_file_name", "masks/" + name + ".png"},
+                      {"width", world.camera.width},
+                      {"height", world.camera.height},
+                      {"timestamp", frames[i].stamp_s}});
+    for (const auto& instance : frames[i].instances) {
+      const InstanceInfo* info = instances.Find(instance.id);
+      const int box_width = instance.x_max - instance.x_min + 1;
+      const int box_height = instance.y_max - instance.y_min + 1;
+      annotations.push_back(
+          {{"id", annotation_id++},
+           {"image_id", image_id},
+           {"category_id", info->category_id},
+           {"segmentation",
+            {{"size", {world.camera.height, world.camera.width}}, {"counts", instance.rle_counts}}},
+           {"area", instance.area_px},
+           {"bbox", {instance.x_min, instance.y_min, box_width, box_height}},
+           {"iscrowd", 0},
+           {"instance_id", instance.id}});
+    }
+  }
+  nlohmann::json categories = nlohmann::json::array();
+  for (int id : used_categories) {
+    const CocoCategory* category = FindCocoCategory(id);
+    categories.push_back({{"id", id},
+                          {"name", std::string(category->name)},
+                          {"supercategory", std::string(category->supercategory)}});
+  }
+  return {{"info", {{"description", "segslam synthetic sequence " + world.name},
+                    {"version", "1.0"}}},
+          {"images", images},
+          {"annotations", annotations},
+          {"categories", categories}};
+}
+
+std::vector<ObjectTrack> ObjectTracks(const scenes::World& world, scenes::Pass pass,
+                                      const std::vector<FrameRecord>& frames) {
+  const double frame_period_s = 1.0 / world.camera.fps;
+  std::vector<ObjectTrack> tracks;
+  for (const auto& object : world.objects) {
+    const bool present = object.placement[scenes::PassIndex(pass)].present;
+    ObjectTrack track;
+    track.instance_id = object.instance_id;
+    for (size_t i = 0; i < frames.size(); ++i) {
+      TrackSample sample;
+      sample.frame = static_cast<int>(i);
+      sample.stamp_s = frames[i].stamp_s;
+      sample.present = present;
+      if (present) {
+        sample.T_world_object = scenes::ObjectPoseAt(object, pass, sample.stamp_s);
+        sample.moving = scenes::ObjectMovesAt(object, pass, sample.stamp_s, frame_period_s);
+      }
+      for (const auto& instance : frames[i].instances) {
+        if (instance.id == object.instance_id) sample.visible_pixels = instance.area_px;
+      }
+      track.samples.push_back(sample);
+    }
+    tracks.push_back(std::move(track));
+  }
+  return tracks;
+}
+
+// Keeps at most `limit` frame jobs in flight; Wait() rethrows a worker's exception.
+class FrameJobQueue {
+ public:
+  explicit FrameJobQueue(int limit) : limit_(std::max(1, limit)) {}
+  void Push(std::function<void()> job) {
+    while (static_cast<int>(in_flight_.size()) >= limit_) PopOldest();
+    in_flight_.push_back(std::async(std::launch::async, std::move(job)));
+  }
+  void WaitAll() {
+    while (!in_flight_.empty()) PopOldest();
+  }
+
+ private:
+  void PopOldest() {
+    auto oldest = std::move(in_flight_.front());
+    in_flight_.pop_front();
+    oldest.get();
+  }
+  int limit_;
+  std::deque<std::future<void>> in_flight_;
+};
+
+int FramesOfPass(const scenes::World& world, scenes::Pass pass, int max_frames_per_pass) {
+  const int frames = world.frames_per_pass[scenes::PassIndex(pass)];
+  return max_frames_per_pass > 0 ? std::min(frames, max_frames_per_pass) : frames;
+}
+
+double KindDefaultMaxDepth(const scenes::World& world) {
+  // Beyond these ranges a real RGB-D sensor (Kinect indoors, a stereo/ToF unit on a car
+  // outdoors) returns nothing; the scenario's sensor.max_depth_m overrides.
+  return world.kind == "office" ? 8.0 : 60.0;
+}
+
+}  // namespace
+
+bool GenerateOptions::IsValid(std::string* error) const {
+  if (max_frames_per_pass < 0) {
+    *error = "max_frames_per_pass must be >= 0";
+    return false;
+  }
+  if (encode_threads < 0) {
+    *error = "encode_threads must be >= 0";
+    return false;
+  }
+  return true;
+}
+
+GenerateSummary GenerateDataset(const scenes::Scenario& scenario, const fs::path& out_dir,
+                                const GenerateOptions& options, const ProgressCallback& progress) {
+  std::string error;
+  if (!options.IsValid(&error)) throw Error("generate: " + error);
+  const auto start = Clock::now();
+
+  const scenes::World world = scenes::BuildWorld(scenario);
+  std::optional<StagingDirectory> staging;
+  if (options.write_files) staging.emplace(out_dir, options.overwrite);
+
+  WorldRenderer renderer(world, options.backend, options.render);
+  const PinholeCamera camera = renderer.intrinsics();
+  const SensorModel sensor(scenario.sensor, camera, KindDefaultMaxDepth(world));
+  const SequenceCamera sequence_camera{camera, world.camera.depth_factor};
+  const int threads = options.encode_threads > 0
+                          ? options.encode_threads
+                          : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+
+  GenerateSummary summary;
+  summary.gl_renderer = renderer.gl_renderer();
+  int total_frames = 0;
+  for (scenes::Pass pass : scenes::kBothPasses) {
+    total_frames += FramesOfPass(world, pass, options.max_frames_per_pass);
+  }
+
+  for (scenes::Pass pass : scenes::kBothPasses) {
+    const int pass_index = scenes::PassIndex(pass);
+    const int frame_count = FramesOfPass(world, pass, options.max_frames_per_pass);
+    const fs::path pass_dir = options.write_files ? staging->path() / scenes::PassName(pass) : fs::path();
+    std::optional<TumSequenceWriter> writer;
+    if (options.write_files) {
+      writer.emplace(pass_dir, sequence_camera);
+      fs::create_directories(pass_dir / "masks");
+    }
+    const InstanceTable instances = InstancesOfPass(world, pass);
+
+    std::vector<FrameRecord> records(static_cast<size_t>(frame_count));
+    FrameJobQueue jobs(2 * threads);
+    Eigen::Isometry3d T_wc_previous = scenes::CameraPoseAt(world, pass, 0.0);
+    for (int i = 0; i < frame_count; ++i) {
+      if (options.cancel && options.cancel->load()) throw Error("generate: cancelled");
+      const double stamp_s = scenes::FrameStamp(world, i);
+      const Eigen::Isometry3d T_wc = scenes::CameraPoseAt(world, pass, stamp_s);
+      const auto render_start = Clock::now();
+      renderer.SetScene(pass, stamp_s);
+      auto frame = std::make_shared<RenderedFrame>(renderer.RenderFrom(T_wc));
+      summary.render_seconds += SecondsSince(render_start);
+      records[i].stamp_s = stamp_s;
+      records[i].T_wc = T_wc;
+      if (writer) writer->Record(i, stamp_s, T_wc);
+
+      // Noise, mask analysis and PNG encoding run beside the renderer.
+      FrameRecord* record = &records[i];
+      const std::string name = TumSequenceWriter::StampName(stamp_s);
+      const bool write_files = options.write_files;
+      jobs.Push([=, &sensor, &instances, &scenario]() {
+        sensor.Apply(scenario.seed, pass_index, i, T_wc_previous, T_wc, frame.get());
+        record->instances = AnalyseMask(frame->instance_ids);
+        CheckMaskIds(frame->instance_ids, instances, name);
+        if (write_files) {
+          WriteColorImage(pass_dir / "rgb" / (name + ".png"), frame->color_bgr);
+          WriteDepthImage(pass_dir / "depth" / (name + ".png"), frame->depth_m,
+                          sequence_camera.depth_factor);
+          WriteInstanceMask(pass_dir / "masks" / (name + ".png"), frame->instance_ids);
+        } else {
+          EncodePng(frame->color_bgr, 1);
+          EncodePng(frame->depth_m, 1);
+          EncodePng(frame->instance_ids, 1);
+        }
+      });
+      T_wc_previous = T_wc;
+      ++summary.frames;
+      if (progress) {
+        progress({pass_index, i + 1, frame_count, summary.frames / SecondsSince(start)});
+      }
+    }
+    jobs.WaitAll();
+
+    if (options.write_files) {
+      writer->Finish();
+      instances.Write(pass_dir / "instances.json");
+      WriteFileAtomically(pass_dir / "annotations_coco.json",
+                          CocoAnnotations(world, instances, records).dump() + "\n");
+      WriteTracks(pass_dir / "tracks.json", ObjectTracks(world, pass, records));
+      WriteFileAtomically(pass_dir / "scenario.yaml", scenario.text);
+      WriteManifest(pass_dir, {{"scenario", scenario.name},
+                               {"seed", scenario.seed},
+                               {"pass", scenes::PassName(pass)},
+                               {"frames", frame_count}});
+    }
+  }
+  (void)total_frames;
+
+  if (options.write_files) {
+    WriteFileAtomically(staging->path() / "scenario.yaml", scenario.text);
+    WriteManifest(staging->path(), {{"scenario", scenario.name},
+                                    {"seed", scenario.seed},
+                                    {"kind", world.kind},
+                                    {"generator", "segslam generate"}});
+    staging->Commit();
+  }
+  summary.seconds = SecondsSince(start);
+  return summary;
+}
+
+RenderOnlySummary RenderOnly(const scenes::Scenario& scenario, GlBackend backend,
+                             const RenderOptions& render, int max_frames_per_pass) {
+  const scenes::World world = scenes::BuildWorld(scenario);
+  WorldRenderer renderer(world, backend, render);
+  RenderOnlySummary summary;
+  summary.gl_renderer = renderer.gl_renderer();
+  const auto start = Clock::now();
+  for (scenes::Pass pass : scenes::kBothPasses) {
+    const int frame_count = FramesOfPass(world, pass, max_frames_per_pass);
+    for (int i = 0; i < frame_count; ++i) {
+      renderer.Render(pass, scenes::FrameStamp(world, i));
+      ++summary.frames;
+    }
+  }
+  summary.seconds = SecondsSince(start);
+  return summary;
+}
+
+}  // namespace segslam::sim

@@ -1,0 +1,73 @@
+// Dataset generation: renders both passes of a scenario and writes them as TUM-layout
+// sequences with instance masks, instance tables, COCO annotations, object tracks,
+// camera files, a copy of the scenario and checksummed manifests.
+//
+// Layout of the output directory:
+//   scenario.yaml, manifest.json
+//   pass1/, pass2/: rgb/ depth/ masks/ rgb.txt depth.txt associations.txt
+//                   groundtruth.txt camera.yaml instances.json annotations_coco.json
+//                   tracks.json scenario.yaml manifest.json
+// The directory is built under a temporary name beside the target and renamed into
+// place only when complete, so a failure or Ctrl-C never leaves one that looks complete.
+#pragma once
+
+#include "scenes/scenario.h"
+#include "sim/gl_context.h"
+#include "sim/world_renderer.h"
+
+#include <atomic>
+#include <filesystem>
+#include <functional>
+#include <string>
+
+namespace segslam::sim {
+
+struct GenerateOptions {
+  GlBackend backend = GlBackend::kOsmesa;  // off-screen GL back-end
+  RenderOptions render;                    // renderer switches (shadows...)
+  int max_frames_per_pass = 0;             // 0 = all frames the scenario defines
+  int encode_threads = 0;                  // threads for noise + PNG encoding; 0 = cores
+  bool overwrite = false;                  // replace an existing output directory
+  bool write_files = true;                 // false: render + noise + encode, write nothing
+                                           // (benchmarks of the pipeline without disk)
+  const std::atomic<bool>* cancel = nullptr;  // set to true to stop (Ctrl-C); checked per frame
+
+  bool IsValid(std::string* error) const;
+};
+
+struct GenerationProgress {
+  int pass_index = 0;   // 0 or 1
+  int frames_done = 0;  // in this pass
+  int frames_total = 0;
+  double frames_per_second = 0.0;  // over the whole run so far
+};
+using ProgressCallback = std::function<void(const GenerationProgress&)>;
+
+struct GenerateSummary {
+  int frames = 0;              // both passes
+  double seconds = 0.0;        // wall time of the whole generation
+  double render_seconds = 0.0;  // of which spent in the renderer (scene update + GL)
+  std::string gl_renderer;     // e.g. "llvmpipe (LLVM 15.0.6, 256 bits)"
+  double FramesPerSecond() const { return seconds > 0 ? frames / seconds : 0.0; }
+};
+
+// Generates the dataset of `scenario` into `out_dir`. Throws segslam::Error on bad
+// input, unwritable output, an unavailable GL back-end, or cancellation; in every such
+// case nothing is left at `out_dir` (an existing directory there is kept unless the
+// run completes with overwrite=true).
+GenerateSummary GenerateDataset(const scenes::Scenario& scenario,
+                                const std::filesystem::path& out_dir,
+                                const GenerateOptions& options,
+                                const ProgressCallback& progress = {});
+
+// Renders both passes without noise or files: the renderer's own speed.
+struct RenderOnlySummary {
+  int frames = 0;
+  double seconds = 0.0;
+  std::string gl_renderer;
+  double FramesPerSecond() const { return seconds > 0 ? frames / seconds : 0.0; }
+};
+RenderOnlySummary RenderOnly(const scenes::Scenario& scenario, GlBackend backend,
+                             const RenderOptions& render, int max_frames_per_pass);
+
+}  // namespace segslam::sim
