@@ -3,6 +3,7 @@
 #include <cmath>
 #include <random>
 
+#include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
 namespace segslam {
