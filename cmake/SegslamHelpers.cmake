@@ -8,10 +8,11 @@ function(segslam_add_library NAME)
   target_link_libraries(segslam_${NAME} PUBLIC ${ARG_PUBLIC_LINK} PRIVATE ${ARG_PRIVATE_LINK})
 endfunction()
 
-# segslam_add_test(NAME SRCS ... LINK ... [LABELS ...] [TIMEOUT s])
-# A GoogleTest executable whose tests are registered with CTest one by one.
+# segslam_add_test(NAME SRCS ... LINK ... [LABELS ...] [TIMEOUT s] [FIXTURE name])
+# A GoogleTest executable whose tests are registered with CTest one by one; FIXTURE
+# names a CTest fixture (e.g. generated datasets) every test of it requires.
 function(segslam_add_test NAME)
-  cmake_parse_arguments(ARG "" "TIMEOUT" "SRCS;LINK;LABELS" ${ARGN})
+  cmake_parse_arguments(ARG "" "TIMEOUT;FIXTURE" "SRCS;LINK;LABELS" ${ARGN})
   add_executable(${NAME} ${ARG_SRCS})
   target_link_libraries(${NAME} PRIVATE ${ARG_LINK} GTest::gtest GTest::gtest_main)
   target_compile_definitions(${NAME} PRIVATE
@@ -20,8 +21,15 @@ function(segslam_add_test NAME)
   if(NOT ARG_TIMEOUT)
     set(ARG_TIMEOUT 600)
   endif()
+  set(properties TIMEOUT ${ARG_TIMEOUT})
+  if(ARG_LABELS)
+    list(APPEND properties LABELS "${ARG_LABELS}")
+  endif()
+  if(ARG_FIXTURE)
+    list(APPEND properties FIXTURES_REQUIRED ${ARG_FIXTURE})
+  endif()
   gtest_discover_tests(${NAME}
     WORKING_DIRECTORY ${PROJECT_BINARY_DIR}
-    PROPERTIES LABELS "${ARG_LABELS}" TIMEOUT ${ARG_TIMEOUT}
+    PROPERTIES ${properties}
     DISCOVERY_TIMEOUT 60)
 endfunction()

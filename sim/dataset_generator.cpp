@@ -327,19 +327,19 @@ GenerateSummary GenerateDataset(const scenes::Scenario& scenario, const fs::path
       summary.render_seconds += SecondsSince(render_start);
       records[i].stamp_s = stamp_s;
       records[i].T_wc = T_wc;
-      if (writer) writer->Record(i, stamp_s, T_wc);
+      if (writer) writer->AddEntry(stamp_s, T_wc);
 
       // Noise, mask analysis and PNG encoding run beside the renderer.
       FrameRecord* record = &records[i];
       const std::string name = TumSequenceWriter::StampName(stamp_s);
       const bool write_files = options.write_files;
-      jobs.Push([=, &sensor, &instances, &scenario]() {
+      jobs.Push([=, &writer, &sensor, &instances, &scenario]() {
         sensor.Apply(scenario.seed, pass_index, i, T_wc_previous, T_wc, frame.get());
         record->instances = AnalyseMask(frame->instance_ids);
         CheckMaskIds(frame->instance_ids, instances, name);
         if (write_files) {
-          WriteColorImage(pass_dir / "rgb" / (name + ".png"), frame->color_bgr);
-          WriteDepthImage(pass_dir / "depth" / (name + ".png"), frame->depth_m,
+          WriteColorImage(writer->RgbPath(stamp_s), frame->color_bgr);
+          WriteDepthImage(writer->DepthPath(stamp_s), frame->depth_m,
                           sequence_camera.depth_factor);
           WriteInstanceMask(pass_dir / "masks" / (name + ".png"), frame->instance_ids);
         } else {

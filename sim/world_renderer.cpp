@@ -1,0 +1,370 @@
+#include "sim/world_renderer.h"
+
+#include <mujoco/mujoco.h>
+
+#include <fmt/format.h>
+#include <opencv2/imgproc.hpp>
+
+#include <cstring>
+#include <mutex>
+
+#include "core/error.h"
+#include "sim/mjcf_builder.h"
+
+namespace segslam::sim {
+namespace {
+
+// MuJoCo reports fatal errors through mju_user_error and then exits the process;
+// turn them into exceptions instead (MuJoCo's C code is built with unwind tables).
+[[noreturn]] void ThrowMujocoError(const char* message) {
+  throw Error(std::string("MuJoCo: ") + message);
+}
+
+void InstallErrorHandler() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    if (mju_user_error == nullptr) mju_user_error = ThrowMujocoError;
+  });
+}
+
+struct ModelDeleter {
+  void operator()(mjModel* m) const { mj_deleteModel(m); }
+};
+struct DataDeleter {
+  void operator()(mjData* d) const { mj_deleteData(d); }
+};
+
+// Compiles MJCF text through MuJoCo's virtual file system (no temporary files).
+mjModel* CompileMjcf(const std::string& xml) {
+  constexpr const char* kName = "segslam_world.xml";
+  mjVFS vfs;
+  mj_defaultVFS(&vfs);
+  if (mj_makeEmptyFileVFS(&vfs, kName, static_cast<int>(xml.size())) != 0) {
+    throw Error("MuJoCo: cannot create the in-memory MJCF file");
+  }
+  const int index = mj_findFileVFS(&vfs, kName);
+  std::memcpy(vfs.filedata[index], xml.data(), xml.size());
+  char error[1024] = "";
+  mjModel* m = mj_loadXML(kName, &vfs, error, sizeof error);
+  mj_deleteVFS(&vfs);
+  if (m == nullptr) throw Error(std::string("MuJoCo cannot compile the world's MJCF: ") + error);
+  return m;
+}
+
+}  // namespace
+
+struct WorldRenderer::Impl {
+  scenes::World world;
+  RenderOptions options;
+  MjcfModel mjcf;
+  std::unique_ptr<GlContext> gl;
+  std::unique_ptr<mjModel, ModelDeleter> model;
+  std::unique_ptr<mjData, DataDeleter> data;
+  mjvScene scene;
+  mjrContext context;
+  mjvOption vis_option;
+  mjvCamera camera;
+  bool scene_made = false;
+  bool context_made = false;
+  int width = 0;
+  int height = 0;
+  double near_m = 0;
+  double far_m = 0;
+  int camera_mocap = -1;
+  std::vector<std::vector<int>> part_mocap;  // [object][part] -> mocap index
+  std::vector<std::uint16_t> geom_instance;  // [model geom] -> instance id (0 = none)
+  std::vector<int> geom_object;              // [model geom] -> object index, -1 = static
+  std::vector<char> object_hidden;           // [object]
+  // Read-back buffers (bottom-up rows, as GL gives them).
+  std::vector<unsigned char> rgb;
+  std::vector<float> depth;
+
+  ~Impl() {
+    if (context_made) mjr_freeContext(&context);
+    if (scene_made) mjv_freeScene(&scene);
+  }
+
+  void UploadTextures();
+  void PrepareScene();
+  void ReadDepth(RenderedFrame* frame);
+};
+
+void WorldRenderer::Impl::UploadTextures() {
+  mjModel* m = model.get();
+  for (size_t i = 0; i < world.textures.size(); ++i) {
+    const int id = mj_name2id(m, mjOBJ_TEXTURE, mjcf.texture_names[i].c_str());
+    const cv::Mat& bgr = world.textures[i].image_bgr;
+    if (id < 0 || m->tex_width[id] != bgr.cols || m->tex_height[id] != bgr.rows) {
+      throw Error(fmt::format("MuJoCo: texture '{}' missing or of unexpected size",
+                              mjcf.texture_names[i]));
+    }
+    // tex_rgb rows are in image order (row 0 = the top of the picture, as MuJoCo loads
+    // PNG files), RGB bytes.
+    cv::Mat rgb_view(bgr.rows, bgr.cols, CV_8UC3, m->tex_rgb + m->tex_adr[id]);
+    cv::cvtColor(bgr, rgb_view, cv::COLOR_BGR2RGB);
+  }
+}
+
+// Poses the camera, runs kinematics and fills MuJoCo's abstract scene with the
+// visible geoms only (hidden objects removed, segmentation ids renumbered).
+void WorldRenderer::Impl::PrepareScene() {
+  mjModel* m = model.get();
+  mjData* d = data.get();
+  mj_kinematics(m, d);
+  mj_comPos(m, d);
+  mj_camlight(m, d);
+  mjv_updateScene(m, d, &vis_option, nullptr, &camera, mjCAT_STATIC | mjCAT_DYNAMIC, &scene);
+  int kept = 0;
+  for (int i = 0; i < scene.ngeom; ++i) {
+    const mjvGeom& g = scene.geoms[i];
+    if (g.objtype == mjOBJ_GEOM && g.objid >= 0) {
+      const int object = geom_object[g.objid];
+      if (object >= 0 && object_hidden[object]) continue;
+    }
+    if (kept != i) scene.geoms[kept] = g;
+    scene.geoms[kept].segid = kept;
+    ++kept;
+  }
+  scene.ngeom = kept;
+}
+
+// Metric depth from the non-linear depth buffer, flipped to top-down rows.
+void WorldRenderer::Impl::ReadDepth(RenderedFrame* frame) {
+  cv::Mat buffer(height, width, CV_32F, depth.data());
+  cv::Mat out(height, width, CV_32F);
+  const float n = static_cast<float>(near_m), f = static_cast<float>(far_m);
+  for (int r = 0; r < height; ++r) {
+    const float* src = buffer.ptr<float>(height - 1 - r);
+    float* dst = out.ptr<float>(r);
+    for (int c = 0; c < width; ++c) {
+      const float z = src[c];
+      dst[c] = z >= 1.0f ? 0.0f : n * f / (f - z * (f - n));
+    }
+  }
+  frame->depth_m = out;
+}
+
+WorldRenderer::WorldRenderer(const scenes::World& world, GlBackend backend,
+                             RenderOptions options)
+    : impl_(std::make_unique<Impl>()) {
+  InstallErrorHandler();
+  Impl& s = *impl_;
+  s.world = world;
+  s.options = options;
+  MjcfOptions mjcf_options;
+  mjcf_options.shadows = options.shadows;
+  s.mjcf = BuildMjcf(world, mjcf_options);
+  s.width = world.camera.width;
+  s.height = world.camera.height;
+
+  s.model.reset(CompileMjcf(s.mjcf.xml));
+  mjModel* m = s.model.get();
+  s.data.reset(mj_makeData(m));
+  s.near_m = m->vis.map.znear * m->stat.extent;
+  s.far_m = m->vis.map.zfar * m->stat.extent;
+  s.UploadTextures();
+
+  // Mocap indices of the camera and of every part; geom -> instance table.
+  const int camera_body = mj_name2id(m, mjOBJ_BODY, s.mjcf.camera_body.c_str());
+  s.camera_mocap = camera_body >= 0 ? m->body_mocapid[camera_body] : -1;
+  if (s.camera_mocap < 0) throw Error("MuJoCo: the camera body is not a mocap body");
+  s.geom_instance.assign(m->ngeom, 0);
+  s.geom_object.assign(m->ngeom, -1);
+  std::vector<int> body_object(m->nbody, -1);
+  s.part_mocap.resize(world.objects.size());
+  for (size_t k = 0; k < world.objects.size(); ++k) {
+    for (const std::string& name : s.mjcf.part_bodies[k]) {
+      const int body = mj_name2id(m, mjOBJ_BODY, name.c_str());
+      if (body < 0 || m->body_mocapid[body] < 0) {
+        throw Error("MuJoCo: part body '" + name + "' missing or not mocap");
+      }
+      s.part_mocap[k].push_back(m->body_mocapid[body]);
+      body_object[body] = static_cast<int>(k);
+    }
+  }
+  for (int g = 0; g < m->ngeom; ++g) {
+    const int object = body_object[m->geom_bodyid[g]];
+    s.geom_object[g] = object;
+    if (object >= 0) s.geom_instance[g] = world.objects[object].instance_id;
+  }
+  s.object_hidden.assign(world.objects.size(), 1);
+
+  // GL context, then MuJoCo's render context drawing into its off-screen buffer.
+  s.gl = std::make_unique<GlContext>(backend, s.width, s.height);
+  mjv_defaultScene(&s.scene);
+  mjv_makeScene(m, &s.scene, m->ngeom + 16);
+  s.scene_made = true;
+  mjr_defaultContext(&s.context);
+  mjr_makeContext(m, &s.context, mjFONTSCALE_50);
+  s.context_made = true;
+  mjr_setBuffer(mjFB_OFFSCREEN, &s.context);
+  if (s.context.currentBuffer != mjFB_OFFSCREEN) {
+    throw Error("MuJoCo: the off-screen framebuffer is not available");
+  }
+  if (s.context.offWidth < s.width || s.context.offHeight < s.height) {
+    throw Error("MuJoCo: off-screen buffer smaller than the camera image");
+  }
+
+  // No decorations: only geoms of static and dynamic bodies, no frames, labels, light or
+  // camera markers; no reflections, skybox, fog or (unless asked) shadows.
+  mjv_defaultOption(&s.vis_option);
+  for (int i = 0; i < mjNVISFLAG; ++i) s.vis_option.flags[i] = 0;
+  s.vis_option.flags[mjVIS_STATIC] = 1;
+  s.vis_option.flags[mjVIS_TEXTURE] = 1;
+  s.vis_option.frame = mjFRAME_NONE;
+  s.vis_option.label = mjLABEL_NONE;
+  for (int i = 0; i < mjNGROUP; ++i) s.vis_option.geomgroup[i] = 1;
+  s.scene.flags[mjRND_SHADOW] = options.shadows ? 1 : 0;
+  s.scene.flags[mjRND_WIREFRAME] = 0;
+  s.scene.flags[mjRND_REFLECTION] = 0;
+  s.scene.flags[mjRND_ADDITIVE] = 0;
+  s.scene.flags[mjRND_SKYBOX] = 0;
+  s.scene.flags[mjRND_FOG] = 0;
+  s.scene.flags[mjRND_HAZE] = 0;
+  s.scene.flags[mjRND_SEGMENT] = 0;
+  s.scene.flags[mjRND_IDCOLOR] = 0;
+  s.scene.flags[mjRND_CULL_FACE] = 1;  // closed geoms: back faces are never seen
+  mjv_defaultCamera(&s.camera);
+  s.camera.type = mjCAMERA_FIXED;
+  s.camera.fixedcamid = mj_name2id(m, mjOBJ_CAMERA, s.mjcf.camera.c_str());
+
+  s.rgb.resize(static_cast<size_t>(s.width) * s.height * 3);
+  s.depth.resize(static_cast<size_t>(s.width) * s.height);
+}
+
+WorldRenderer::~WorldRenderer() {
+  // MuJoCo's GL objects must be freed while their context is current.
+  if (impl_ && impl_->gl) {
+    try {
+      impl_->gl->MakeCurrent();
+    } catch (const Error&) {
+    }
+  }
+}
+
+PinholeCamera WorldRenderer::intrinsics() const {
+  const scenes::CameraSpec& c = impl_->world.camera;
+  return PinholeCamera::FromVerticalFov(c.width, c.height, c.fovy_deg);
+}
+
+void WorldRenderer::SetPartPoses(const std::vector<std::vector<Eigen::Isometry3d>>& poses) {
+  Impl& s = *impl_;
+  if (poses.size() != s.world.objects.size()) {
+    throw Error(fmt::format("SetPartPoses: {} objects given, the world has {}", poses.size(),
+                            s.world.objects.size()));
+  }
+  mjData* d = s.data.get();
+  for (size_t k = 0; k < poses.size(); ++k) {
+    if (poses[k].empty()) {
+      s.object_hidden[k] = 1;
+      continue;
+    }
+    if (poses[k].size() != s.part_mocap[k].size()) {
+      throw Error(fmt::format("SetPartPoses: object {} has {} parts, {} poses given", k,
+                              s.part_mocap[k].size(), poses[k].size()));
+    }
+    s.object_hidden[k] = 0;
+    for (size_t j = 0; j < poses[k].size(); ++j) {
+      const int id = s.part_mocap[k][j];
+      const Eigen::Vector3d t = poses[k][j].translation();
+      Eigen::Quaterniond q(poses[k][j].linear());
+      q.normalize();
+      mjtNum* pos = d->mocap_pos + 3 * id;
+      mjtNum* quat = d->mocap_quat + 4 * id;
+      pos[0] = t.x(); pos[1] = t.y(); pos[2] = t.z();
+      quat[0] = q.w(); quat[1] = q.x(); quat[2] = q.y(); quat[3] = q.z();
+    }
+  }
+}
+
+void WorldRenderer::SetScene(scenes::Pass pass, double stamp_s) {
+  std::vector<std::vector<Eigen::Isometry3d>> poses;
+  poses.reserve(impl_->world.objects.size());
+  for (const scenes::Object& object : impl_->world.objects) {
+    poses.push_back(scenes::PartPosesAt(object, pass, stamp_s));
+  }
+  SetPartPoses(poses);
+}
+
+RenderedFrame WorldRenderer::RenderFrom(const Eigen::Isometry3d& T_wc) {
+  Impl& s = *impl_;
+  mjData* d = s.data.get();
+  // The camera body is the optical frame; its camera is rotated into MuJoCo's convention.
+  {
+    const Eigen::Vector3d t = T_wc.translation();
+    Eigen::Quaterniond q(T_wc.linear());
+    q.normalize();
+    mjtNum* pos = d->mocap_pos + 3 * s.camera_mocap;
+    mjtNum* quat = d->mocap_quat + 4 * s.camera_mocap;
+    pos[0] = t.x(); pos[1] = t.y(); pos[2] = t.z();
+    quat[0] = q.w(); quat[1] = q.x(); quat[2] = q.y(); quat[3] = q.z();
+  }
+  s.PrepareScene();
+  const mjrRect viewport = {0, 0, s.width, s.height};
+  RenderedFrame frame;
+  const bool ids = s.options.render_ids;
+  const bool color = s.options.render_color || !ids;  // depth needs at least one pass
+
+  if (color) {
+    s.scene.flags[mjRND_SEGMENT] = 0;
+    s.scene.flags[mjRND_IDCOLOR] = 0;
+    mjr_render(viewport, &s.scene, &s.context);
+    mjr_readPixels(s.options.render_color ? s.rgb.data() : nullptr,
+                   ids ? nullptr : s.depth.data(), viewport, &s.context);
+    if (!ids) s.ReadDepth(&frame);
+    if (s.options.render_color) {
+      cv::Mat rgb(s.height, s.width, CV_8UC3, s.rgb.data());
+      cv::Mat flipped;
+      cv::flip(rgb, flipped, 0);
+      cv::cvtColor(flipped, frame.color_bgr, cv::COLOR_RGB2BGR);
+    }
+  }
+  if (ids) {
+    // Segmentation colours: lighting and textures off, each geom drawn with the colour
+    // (segid + 1) = r + 256 g + 65536 b; opaque so that nothing is blended.
+    for (int i = 0; i < s.scene.ngeom; ++i) s.scene.geoms[i].rgba[3] = 1.0f;
+    s.scene.flags[mjRND_SEGMENT] = 1;
+    s.scene.flags[mjRND_IDCOLOR] = 1;
+    mjr_render(viewport, &s.scene, &s.context);
+    s.scene.flags[mjRND_SEGMENT] = 0;
+    s.scene.flags[mjRND_IDCOLOR] = 0;
+    mjr_readPixels(s.rgb.data(), s.depth.data(), viewport, &s.context);
+    s.ReadDepth(&frame);
+    std::vector<std::uint16_t> segid_instance(s.scene.ngeom + 1, 0);
+    for (int i = 0; i < s.scene.ngeom; ++i) {
+      const mjvGeom& g = s.scene.geoms[i];
+      if (g.objtype == mjOBJ_GEOM && g.objid >= 0) {
+        segid_instance[i + 1] = s.geom_instance[g.objid];
+      }
+    }
+    frame.instance_ids.create(s.height, s.width, CV_16U);
+    for (int r = 0; r < s.height; ++r) {
+      const unsigned char* src = s.rgb.data() + static_cast<size_t>(s.height - 1 - r) * s.width * 3;
+      std::uint16_t* dst = frame.instance_ids.ptr<std::uint16_t>(r);
+      for (int c = 0; c < s.width; ++c) {
+        const unsigned v = src[3 * c] + 256u * src[3 * c + 1] + 65536u * src[3 * c + 2];
+        dst[c] = v < segid_instance.size() ? segid_instance[v] : 0;
+      }
+    }
+  }
+  // Where nothing was hit, the sky colour.
+  if (!frame.color_bgr.empty()) {
+    const Eigen::Vector3f& sky = s.world.sky_rgb;
+    const cv::Vec3b sky_bgr(cv::saturate_cast<uchar>(sky.z() * 255.f),
+                            cv::saturate_cast<uchar>(sky.y() * 255.f),
+                            cv::saturate_cast<uchar>(sky.x() * 255.f));
+    frame.color_bgr.setTo(sky_bgr, frame.depth_m == 0);
+  }
+  return frame;
+}
+
+RenderedFrame WorldRenderer::Render(scenes::Pass pass, double stamp_s) {
+  SetScene(pass, stamp_s);
+  return RenderFrom(scenes::CameraPoseAt(impl_->world, pass, stamp_s));
+}
+
+std::string WorldRenderer::gl_renderer() const { return impl_->gl->renderer(); }
+const std::string& WorldRenderer::mjcf() const { return impl_->mjcf.xml; }
+int WorldRenderer::geom_count() const { return impl_->model->ngeom; }
+
+}  // namespace segslam::sim

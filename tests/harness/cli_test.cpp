@@ -1,0 +1,139 @@
+// The command line's answers to bad input: one line on stderr, a non-zero exit code,
+// and nothing left at the output path.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <sys/wait.h>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct CommandResult {
+  int exit_code = -1;
+  std::string stderr_text;
+};
+
+// Runs the segslam binary with `arguments` (shell-quoted by the caller), capturing stderr.
+CommandResult RunSegslam(const std::string& arguments, const std::string& env = "") {
+  const fs::path stderr_file = fs::temp_directory_path() /
+                               ("segslam_cli_test_" + std::to_string(::getpid()) + ".err");
+  const std::string command = env + " " + SEGSLAM_BINARY + " " + arguments + " >/dev/null 2>" +
+                              stderr_file.string();
+  const int status = std::system(command.c_str());
+  CommandResult result;
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream in(stderr_file);
+  result.stderr_text.assign(std::istreambuf_iterator<char>(in), {});
+  fs::remove(stderr_file);
+  return result;
+}
+
+int LineCount(const std::string& text) {
+  int lines = 0;
+  for (char c : text) lines += c == '\n';
+  return lines;
+}
+
+class CliBadInputTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("segslam_cli_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  fs::path WriteScenario(const std::string& name, const std::string& text) {
+    const fs::path file = dir_ / name;
+    std::ofstream(file) << text;
+    return file;
+  }
+
+  // Expects a failed `generate` of `scenario` with a one-line error containing every
+  // fragment, and no output directory left behind.
+  void ExpectGenerateFails(const fs::path& scenario, const std::vector<std::string>& fragments,
+                           const std::string& extra_args = "", const std::string& env = "") {
+    const fs::path out = dir_ / "out";
+    const CommandResult result =
+        RunSegslam("generate " + scenario.string() + " --out " + out.string() + " --frames 2 -q " +
+                       extra_args,
+                   env);
+    EXPECT_NE(result.exit_code, 0);
+    EXPECT_EQ(LineCount(result.stderr_text), 1) << result.stderr_text;
+    for (const auto& fragment : fragments) {
+      EXPECT_NE(result.stderr_text.find(fragment), std::string::npos)
+          << "missing '" << fragment << "' in: " << result.stderr_text;
+    }
+    EXPECT_FALSE(fs::exists(out));
+    // No hidden partial directory either.
+    for (const auto& entry : fs::directory_iterator(dir_)) {
+      EXPECT_EQ(entry.path().filename().string().find(".out.partial"), std::string::npos);
+    }
+  }
+
+  fs::path dir_;
+};
+
+const char* kSmallOffice = SEGSLAM_SOURCE_DIR "/scenarios/test/office_small.yaml";
+
+TEST_F(CliBadInputTest, MalformedYamlNamesFileAndLine) {
+  const fs::path file = WriteScenario("broken.yaml", "name: broken\nkind: [office\nseed: 3\n");
+  ExpectGenerateFails(file, {"broken.yaml", "line"});
+}
+
+TEST_F(CliBadInputTest, UnknownKeyIsNamed) {
+  const fs::path file =
+      WriteScenario("typo.yaml", "name: typo\nkind: city\ncity:\n  movng_cars: 3\n");
+  ExpectGenerateFails(file, {"typo.yaml", "movng_cars"});
+}
+
+TEST_F(CliBadInputTest, OutOfRangeValueIsNamed) {
+  const fs::path file =
+      WriteScenario("range.yaml", "name: range\nkind: city\ncity:\n  moving_cars: -3\n");
+  ExpectGenerateFails(file, {"range.yaml", "moving_cars"});
+}
+
+TEST_F(CliBadInputTest, MissingScenarioFile) {
+  ExpectGenerateFails(dir_ / "nowhere.yaml", {"nowhere.yaml"});
+}
+
+TEST_F(CliBadInputTest, UnwritableOutputPath) {
+  // A regular file where the output's parent directory should be.
+  const fs::path blocker = dir_ / "blocker";
+  std::ofstream(blocker) << "not a directory";
+  const CommandResult result = RunSegslam(std::string("generate ") + kSmallOffice + " --out " +
+                                          (blocker / "out").string() + " --frames 2 -q");
+  EXPECT_NE(result.exit_code, 0);
+  EXPECT_EQ(LineCount(result.stderr_text), 1) << result.stderr_text;
+  EXPECT_NE(result.stderr_text.find("blocker"), std::string::npos) << result.stderr_text;
+}
+
+TEST_F(CliBadInputTest, ExistingOutputIsKeptWithoutForce) {
+  const fs::path out = dir_ / "out";
+  fs::create_directories(out);
+  std::ofstream(out / "keep.txt") << "precious";
+  const CommandResult result = RunSegslam(std::string("generate ") + kSmallOffice + " --out " +
+                                          out.string() + " --frames 2 -q");
+  EXPECT_NE(result.exit_code, 0);
+  EXPECT_NE(result.stderr_text.find("already exists"), std::string::npos) << result.stderr_text;
+  EXPECT_TRUE(fs::exists(out / "keep.txt"));
+}
+
+TEST_F(CliBadInputTest, UnknownGlBackend) {
+  ExpectGenerateFails(kSmallOffice, {"unknown GL back-end", "vulkan"}, "--gl vulkan");
+}
+
+TEST_F(CliBadInputTest, UnavailableEglBackend) {
+  // Point GLVND at no EGL vendor at all: EGL cannot start, and generate must say so.
+  ExpectGenerateFails(kSmallOffice, {"EGL"}, "--gl egl",
+                      "__EGL_VENDOR_LIBRARY_FILENAMES=/nonexistent/vendor.json");
+}
+
+}  // namespace

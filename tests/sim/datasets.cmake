@@ -1,0 +1,28 @@
+# Datasets that the dataset checks read, each generated once per ctest run by a CTest
+# fixture (so test processes share them), into build/test_data/<name>.
+set(SEGSLAM_TEST_DATA_DIR ${PROJECT_BINARY_DIR}/test_data)
+
+# segslam_add_test_dataset(NAME SCENARIO ARGS ...)
+function(segslam_add_test_dataset NAME SCENARIO)
+  add_test(NAME generate_${NAME}
+    COMMAND segslam generate ${PROJECT_SOURCE_DIR}/${SCENARIO}
+            --out ${SEGSLAM_TEST_DATA_DIR}/${NAME} --force --quiet ${ARGN})
+  set_tests_properties(generate_${NAME} PROPERTIES FIXTURES_SETUP sim_datasets TIMEOUT 900)
+endfunction()
+
+# Noise-free, with moving objects: re-projection, masks, tracks, pass-2 changes.
+segslam_add_test_dataset(city_clean scenarios/city_two_pass.yaml
+  --frames 40 --set sensor.enabled=false)
+segslam_add_test_dataset(office_clean scenarios/office_walking_xyz.yaml
+  --frames 40 --set sensor.enabled=false)
+# Default sensor noise: the independent odometry and ORB texture checks.
+segslam_add_test_dataset(city_static scenarios/city_two_pass.yaml
+  --frames 120 --set city.moving_cars=0 --set city.pedestrians=0)
+segslam_add_test_dataset(office_noisy scenarios/office_walking_xyz.yaml --frames 40)
+
+segslam_add_test(sim_dataset_tests
+  SRCS dataset_generator_test.cpp
+  LINK segslam_sim segslam_scenes segslam_core opencv_features2d opencv_rgbd opencv_imgproc
+  FIXTURE sim_datasets)
+target_compile_definitions(sim_dataset_tests PRIVATE
+  SEGSLAM_TEST_DATA_DIR="${SEGSLAM_TEST_DATA_DIR}")
