@@ -21,6 +21,7 @@ int RunCli(int argc, char** argv) {
   std::function<int()> action;
   AddGenerateCommand(app, &action);
   AddBenchCommand(app, &action);
+  AddPreviewCommand(app, &action);
 
   try {
     app.parse(argc, argv);

@@ -82,8 +82,20 @@ struct Scenario {
 
 // Reads and validates a scenario; throws segslam::Error naming the file and the key.
 Scenario LoadScenario(const std::filesystem::path& file);
-// Same, from text; `origin` names the source in error messages.
+// Same, from text; `origin` names the source in error messages and becomes
+// source_file of the result.
 Scenario ParseScenario(const std::string& yaml_text, const std::string& origin);
+
+// Sets one key for sweeps and CLI overrides, e.g. ("city.moving_cars", "8") or
+// ("pass2.camera_offset_m", "[0, 1, 0]"). `value` is read as YAML. The key is written
+// into the scenario's YAML (its `text`, or ScenarioToYaml() when text is empty) and the
+// result re-parsed with the same validation, so a bad key or value throws the same
+// errors as a file would. On success `scenario.text` holds the edited YAML.
+void ApplyOverride(Scenario& scenario, const std::string& dotted_key, const std::string& value);
+
+// The full effective configuration (every key, defaults included, plus `expect`), for
+// reports that echo what ran. ParseScenario(Dump(ScenarioToYaml(s))) reproduces s.
+YAML::Node ScenarioToYaml(const Scenario& scenario);
 
 // Builds the world the scenario describes. Deterministic in scenario.seed.
 World BuildWorld(const Scenario& scenario);

@@ -93,6 +93,8 @@ struct Object {
   bool moveable = false;          // on the moveable shortlist (core/coco.h)
   Articulation articulation = Articulation::kRigid;
   double gait_phase_offset = 0.0;  // walkers/sitters: phase at t = 0, [0, 1)
+  double body_scale = 1.0;         // walkers/sitters: 1 = a 1.75 m tall person
+  bool animated = true;            // sitters: sway torso, head and arms; false = still
   std::vector<Part> parts;         // kRigid: one or more parts, posed together
   std::array<Placement, 2> placement;  // indexed by PassIndex()
 };
@@ -126,6 +128,15 @@ struct CameraSpec {
   double far_m = 200.0;
 };
 
+// What pass 2 changed, by instance id (sorted), and how many objects could change
+// (parked cars in a city; moveable rigid objects not under a sitter in an office).
+struct SecondPassChanges {
+  int candidates = 0;
+  std::vector<std::uint16_t> relocated;  // present in both passes, elsewhere in pass 2
+  std::vector<std::uint16_t> removed;    // present in pass 1 only
+  std::vector<std::uint16_t> added;      // present in pass 2 only
+};
+
 struct World {
   std::string name;  // scenario name
   std::string kind;  // "city" or "office"
@@ -139,6 +150,7 @@ struct World {
   std::vector<Object> objects;
   std::vector<Light> lights;
   std::array<CameraRoute, 2> camera_route;  // indexed by PassIndex()
+  SecondPassChanges pass2_changes;
 };
 
 // Time of frame `index` of a pass, seconds from the start of that pass.

@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 #include <opencv2/imgproc.hpp>
 
+#include <array>
 #include <cstring>
 #include <mutex>
 
@@ -77,7 +78,9 @@ struct WorldRenderer::Impl {
   std::vector<char> object_hidden;           // [object]
   // Read-back buffers (bottom-up rows, as GL gives them).
   std::vector<unsigned char> rgb;
-  std::vector<float> depth;
+  std::vector<float> depth;     // of the full scene
+  std::vector<float> id_depth;  // of the id pass (instances only)
+  std::array<Eigen::Vector3d, 4> frustum_side_normals;  // camera frame, unit
 
   ~Impl() {
     if (context_made) mjr_freeContext(&context);
@@ -85,9 +88,69 @@ struct WorldRenderer::Impl {
   }
 
   void UploadTextures();
-  void PrepareScene();
+  void PrepareScene(const Eigen::Isometry3d& T_wc);
+  bool OutsideView(const mjvGeom& geom, const Eigen::Isometry3d& T_cw) const;
   void ReadDepth(RenderedFrame* frame);
+  void RenderInstanceIds(const mjrRect& viewport, bool have_full_depth, RenderedFrame* frame);
 };
+
+// The id pass draws only the geoms of instances, in MuJoCo's segmentation colours
+// (lighting and textures off, colour = segid + 1 = r + 256 g + 65536 b). Static
+// scenery covers most of the image and is id 0 anyway, so leaving it out makes this
+// pass several times cheaper on a software rasteriser. Occlusion by scenery is restored
+// by comparing with the full scene's depth buffer (`depth`, from the colour pass): the
+// same triangles rasterised with the same transforms give bit-identical depth, so an
+// instance pixel whose depth is not the full scene's depth is hidden behind scenery.
+void WorldRenderer::Impl::RenderInstanceIds(const mjrRect& viewport, bool have_full_depth,
+                                            RenderedFrame* frame) {
+  const int full_ngeom = scene.ngeom;
+  std::vector<mjvGeom> all_geoms(scene.geoms, scene.geoms + full_ngeom);
+  std::vector<std::uint16_t> segid_instance(1, 0);  // [segid + 1] -> instance id
+  int kept = 0;
+  for (int i = 0; i < full_ngeom; ++i) {
+    const mjvGeom& g = all_geoms[i];
+    const bool is_instance = g.objtype == mjOBJ_GEOM && g.objid >= 0 && geom_instance[g.objid] != 0;
+    // Without a full-scene depth to compare with, every geom must be drawn.
+    if (!is_instance && have_full_depth) continue;
+    scene.geoms[kept] = g;
+    scene.geoms[kept].segid = kept;
+    scene.geoms[kept].rgba[3] = 1.0f;  // opaque: nothing may be blended
+    segid_instance.push_back(is_instance ? geom_instance[g.objid] : 0);
+    ++kept;
+  }
+  scene.ngeom = kept;
+  scene.flags[mjRND_SEGMENT] = 1;
+  scene.flags[mjRND_IDCOLOR] = 1;
+  mjr_render(viewport, &scene, &context);
+  scene.flags[mjRND_SEGMENT] = 0;
+  scene.flags[mjRND_IDCOLOR] = 0;
+  std::copy(all_geoms.begin(), all_geoms.end(), scene.geoms);
+  scene.ngeom = full_ngeom;
+
+  if (have_full_depth) {
+    id_depth.resize(depth.size());
+    mjr_readPixels(rgb.data(), id_depth.data(), viewport, &context);
+  } else {
+    mjr_readPixels(rgb.data(), depth.data(), viewport, &context);
+    ReadDepth(frame);
+  }
+  // Depth buffers hold 24-bit values; a few quanta of slack absorb float conversion.
+  constexpr float kSameDepth = 4.0f / (1 << 24);
+  frame->instance_ids.create(height, width, CV_16U);
+  for (int r = 0; r < height; ++r) {
+    const size_t row = static_cast<size_t>(height - 1 - r) * width;
+    const unsigned char* src = rgb.data() + 3 * row;
+    std::uint16_t* dst = frame->instance_ids.ptr<std::uint16_t>(r);
+    for (int c = 0; c < width; ++c) {
+      const unsigned v = src[3 * c] + 256u * src[3 * c + 1] + 65536u * src[3 * c + 2];
+      std::uint16_t id = v < segid_instance.size() ? segid_instance[v] : 0;
+      if (id != 0 && have_full_depth && std::abs(id_depth[row + c] - depth[row + c]) > kSameDepth) {
+        id = 0;
+      }
+      dst[c] = id;
+    }
+  }
+}
 
 void WorldRenderer::Impl::UploadTextures() {
   mjModel* m = model.get();
@@ -105,15 +168,34 @@ void WorldRenderer::Impl::UploadTextures() {
   }
 }
 
+// Whether a geom's bounding sphere lies wholly outside the camera's view frustum.
+// MuJoCo hands every geom of the model to GL; a city has thousands, most of them
+// behind or beside the camera, and llvmpipe spends its time transforming their
+// vertices. Dropping them first changes no pixel.
+bool WorldRenderer::Impl::OutsideView(const mjvGeom& geom, const Eigen::Isometry3d& T_cw) const {
+  if (geom.objtype != mjOBJ_GEOM || geom.objid < 0) return false;
+  const double radius = model->geom_rbound[geom.objid];
+  if (radius <= 0) return false;  // planes: unbounded for MuJoCo, always drawn
+  const Eigen::Vector3d p = T_cw * Eigen::Vector3d(geom.pos[0], geom.pos[1], geom.pos[2]);
+  if (p.z() + radius < near_m || p.z() - radius > far_m) return true;
+  // Side planes through the optical centre; normals point out of the frustum.
+  for (const Eigen::Vector3d& normal : frustum_side_normals) {
+    if (normal.dot(p) > radius) return true;
+  }
+  return false;
+}
+
 // Poses the camera, runs kinematics and fills MuJoCo's abstract scene with the
-// visible geoms only (hidden objects removed, segmentation ids renumbered).
-void WorldRenderer::Impl::PrepareScene() {
+// geoms that can be seen (hidden objects and geoms outside the view removed,
+// segmentation ids renumbered).
+void WorldRenderer::Impl::PrepareScene(const Eigen::Isometry3d& T_wc) {
   mjModel* m = model.get();
   mjData* d = data.get();
   mj_kinematics(m, d);
   mj_comPos(m, d);
   mj_camlight(m, d);
   mjv_updateScene(m, d, &vis_option, nullptr, &camera, mjCAT_STATIC | mjCAT_DYNAMIC, &scene);
+  const Eigen::Isometry3d T_cw = T_wc.inverse();
   int kept = 0;
   for (int i = 0; i < scene.ngeom; ++i) {
     const mjvGeom& g = scene.geoms[i];
@@ -121,6 +203,7 @@ void WorldRenderer::Impl::PrepareScene() {
       const int object = geom_object[g.objid];
       if (object >= 0 && object_hidden[object]) continue;
     }
+    if (OutsideView(g, T_cw)) continue;
     if (kept != i) scene.geoms[kept] = g;
     scene.geoms[kept].segid = kept;
     ++kept;
@@ -228,6 +311,18 @@ WorldRenderer::WorldRenderer(const scenes::World& world, GlBackend backend,
   s.camera.type = mjCAMERA_FIXED;
   s.camera.fixedcamid = mj_name2id(m, mjOBJ_CAMERA, s.mjcf.camera.c_str());
 
+  {
+    // Frustum side planes of the optical frame, a little wider than the image so that
+    // rounding never drops a geom that touches the border.
+    const PinholeCamera intrinsics = PinholeCamera::FromVerticalFov(
+        s.width, s.height, s.world.camera.fovy_deg);
+    const double tan_x = 1.02 * 0.5 * s.width / intrinsics.fx;
+    const double tan_y = 1.02 * 0.5 * s.height / intrinsics.fy;
+    s.frustum_side_normals = {Eigen::Vector3d(1, 0, -tan_x).normalized(),
+                              Eigen::Vector3d(-1, 0, -tan_x).normalized(),
+                              Eigen::Vector3d(0, 1, -tan_y).normalized(),
+                              Eigen::Vector3d(0, -1, -tan_y).normalized()};
+  }
   s.rgb.resize(static_cast<size_t>(s.width) * s.height * 3);
   s.depth.resize(static_cast<size_t>(s.width) * s.height);
 }
@@ -299,7 +394,7 @@ RenderedFrame WorldRenderer::RenderFrom(const Eigen::Isometry3d& T_wc) {
     pos[0] = t.x(); pos[1] = t.y(); pos[2] = t.z();
     quat[0] = q.w(); quat[1] = q.x(); quat[2] = q.y(); quat[3] = q.z();
   }
-  s.PrepareScene();
+  s.PrepareScene(T_wc);
   const mjrRect viewport = {0, 0, s.width, s.height};
   RenderedFrame frame;
   const bool ids = s.options.render_ids;
@@ -309,9 +404,9 @@ RenderedFrame WorldRenderer::RenderFrom(const Eigen::Isometry3d& T_wc) {
     s.scene.flags[mjRND_SEGMENT] = 0;
     s.scene.flags[mjRND_IDCOLOR] = 0;
     mjr_render(viewport, &s.scene, &s.context);
-    mjr_readPixels(s.options.render_color ? s.rgb.data() : nullptr,
-                   ids ? nullptr : s.depth.data(), viewport, &s.context);
-    if (!ids) s.ReadDepth(&frame);
+    mjr_readPixels(s.options.render_color ? s.rgb.data() : nullptr, s.depth.data(), viewport,
+                   &s.context);
+    s.ReadDepth(&frame);
     if (s.options.render_color) {
       cv::Mat rgb(s.height, s.width, CV_8UC3, s.rgb.data());
       cv::Mat flipped;
@@ -319,34 +414,7 @@ RenderedFrame WorldRenderer::RenderFrom(const Eigen::Isometry3d& T_wc) {
       cv::cvtColor(flipped, frame.color_bgr, cv::COLOR_RGB2BGR);
     }
   }
-  if (ids) {
-    // Segmentation colours: lighting and textures off, each geom drawn with the colour
-    // (segid + 1) = r + 256 g + 65536 b; opaque so that nothing is blended.
-    for (int i = 0; i < s.scene.ngeom; ++i) s.scene.geoms[i].rgba[3] = 1.0f;
-    s.scene.flags[mjRND_SEGMENT] = 1;
-    s.scene.flags[mjRND_IDCOLOR] = 1;
-    mjr_render(viewport, &s.scene, &s.context);
-    s.scene.flags[mjRND_SEGMENT] = 0;
-    s.scene.flags[mjRND_IDCOLOR] = 0;
-    mjr_readPixels(s.rgb.data(), s.depth.data(), viewport, &s.context);
-    s.ReadDepth(&frame);
-    std::vector<std::uint16_t> segid_instance(s.scene.ngeom + 1, 0);
-    for (int i = 0; i < s.scene.ngeom; ++i) {
-      const mjvGeom& g = s.scene.geoms[i];
-      if (g.objtype == mjOBJ_GEOM && g.objid >= 0) {
-        segid_instance[i + 1] = s.geom_instance[g.objid];
-      }
-    }
-    frame.instance_ids.create(s.height, s.width, CV_16U);
-    for (int r = 0; r < s.height; ++r) {
-      const unsigned char* src = s.rgb.data() + static_cast<size_t>(s.height - 1 - r) * s.width * 3;
-      std::uint16_t* dst = frame.instance_ids.ptr<std::uint16_t>(r);
-      for (int c = 0; c < s.width; ++c) {
-        const unsigned v = src[3 * c] + 256u * src[3 * c + 1] + 65536u * src[3 * c + 2];
-        dst[c] = v < segid_instance.size() ? segid_instance[v] : 0;
-      }
-    }
-  }
+  if (ids) s.RenderInstanceIds(viewport, color, &frame);
   // Where nothing was hit, the sky colour.
   if (!frame.color_bgr.empty()) {
     const Eigen::Vector3f& sky = s.world.sky_rgb;

@@ -1,0 +1,108 @@
+// `segslam preview DATASET/passN --frames 0,30,59 --out sheet.png`: a contact sheet of
+// generated frames for a person to look at: colour | depth (colour-mapped) | instance
+// overlay, one row per frame.
+#include "core/error.h"
+#include "core/image_io.h"
+#include "core/atomic_file.h"
+#include "core/tum_dataset.h"
+#include "harness/commands.h"
+
+#include <fmt/format.h>
+#include <opencv2/imgproc.hpp>
+
+#include <filesystem>
+#include <memory>
+
+namespace segslam::harness {
+namespace {
+
+struct PreviewArgs {
+  std::string sequence_dir;
+  std::vector<int> frames{0};
+  std::string out_file;
+  double max_depth_m = 0;  // 0 = the 98th percentile of the first frame
+};
+
+// A stable, well-spread colour per instance id.
+cv::Vec3b InstanceColor(std::uint16_t id) {
+  const unsigned hash = id * 2654435761u;
+  return {static_cast<uchar>(64 + (hash & 0x7f)), static_cast<uchar>(64 + ((hash >> 8) & 0x7f)),
+          static_cast<uchar>(64 + ((hash >> 16) & 0x7f))};
+}
+
+cv::Mat DepthPicture(const cv::Mat& depth_m, double max_depth_m) {
+  cv::Mat scaled;
+  depth_m.convertTo(scaled, CV_8U, 255.0 / max_depth_m);
+  cv::Mat colored;
+  cv::applyColorMap(scaled, colored, cv::COLORMAP_TURBO);
+  colored.setTo(cv::Scalar(0, 0, 0), depth_m == 0.f);
+  return colored;
+}
+
+cv::Mat OverlayPicture(const cv::Mat& color_bgr, const cv::Mat& ids) {
+  cv::Mat overlay = color_bgr.clone();
+  for (int v = 0; v < ids.rows; ++v) {
+    for (int u = 0; u < ids.cols; ++u) {
+      const std::uint16_t id = ids.at<std::uint16_t>(v, u);
+      if (id == 0) continue;
+      cv::Vec3b& pixel = overlay.at<cv::Vec3b>(v, u);
+      const cv::Vec3b tint = InstanceColor(id);
+      for (int c = 0; c < 3; ++c) pixel[c] = static_cast<uchar>((pixel[c] + 2 * tint[c]) / 3);
+    }
+  }
+  return overlay;
+}
+
+int RunPreview(const PreviewArgs& args) {
+  namespace fs = std::filesystem;
+  const TumSequence sequence = TumSequence::Open(args.sequence_dir);
+  std::vector<cv::Mat> rows;
+  double max_depth_m = args.max_depth_m;
+  for (int index : args.frames) {
+    if (index < 0 || static_cast<size_t>(index) >= sequence.size()) {
+      throw Error(fmt::format("{}: frame {} out of range (0..{})", args.sequence_dir, index,
+                              sequence.size() - 1));
+    }
+    const RgbdFrame frame = sequence.LoadFrame(index);
+    if (max_depth_m <= 0) {
+      std::vector<float> valid;
+      for (auto it = frame.depth_m.begin<float>(); it != frame.depth_m.end<float>(); ++it) {
+        if (*it > 0) valid.push_back(*it);
+      }
+      std::sort(valid.begin(), valid.end());
+      max_depth_m = valid.empty() ? 1.0 : valid[valid.size() * 98 / 100];
+    }
+    const fs::path mask_file = fs::path(args.sequence_dir) / "masks" /
+                               fs::path(sequence.entries()[index].rgb_file).filename();
+    cv::Mat overlay = fs::exists(mask_file)
+                          ? OverlayPicture(frame.color_bgr, ReadInstanceMask(mask_file))
+                          : frame.color_bgr.clone();
+    cv::Mat row;
+    cv::hconcat(std::vector<cv::Mat>{frame.color_bgr, DepthPicture(frame.depth_m, max_depth_m), overlay},
+                row);
+    cv::putText(row, fmt::format("frame {}  t={:.3f}s  depth 0..{:.1f} m", index, frame.stamp_s, max_depth_m),
+                {8, 20}, cv::FONT_HERSHEY_SIMPLEX, 0.5, {255, 255, 255}, 1, cv::LINE_AA);
+    rows.push_back(row);
+  }
+  cv::Mat sheet;
+  cv::vconcat(rows, sheet);
+  WriteImageAtomically(args.out_file, sheet);
+  fmt::print("wrote {} ({} frames: colour | depth | instances)\n", args.out_file, rows.size());
+  return 0;
+}
+
+}  // namespace
+
+void AddPreviewCommand(CLI::App& app, std::function<int()>* action) {
+  auto args = std::make_shared<PreviewArgs>();
+  CLI::App* command = app.add_subcommand(
+      "preview", "Write a contact sheet of a sequence's frames: colour | depth | instance overlay");
+  command->add_option("sequence", args->sequence_dir, "A TUM-layout sequence, e.g. data/city/pass1")
+      ->required();
+  command->add_option("--frames", args->frames, "Frame indices, e.g. 0,30,59")->delimiter(',');
+  command->add_option("--out,-o", args->out_file, "Output PNG")->required();
+  command->add_option("--max-depth", args->max_depth_m, "Depth colour scale in metres (0 = auto)");
+  command->callback([args, action] { *action = [args] { return RunPreview(*args); }; });
+}
+
+}  // namespace segslam::harness

@@ -1,0 +1,812 @@
+// An AirSim-like city: a street grid around a random car route, buildings with detailed
+// facades, sidewalks, markings, street furniture, parked and moving cars, pedestrians.
+//
+// Layout: street centre lines at x = i * block and y = j * block; cars drive on the
+// right. A node is an intersection (i, j). Everything stands on the ground plane z = 0;
+// sidewalks are raised by kCurbHeightM.
+#include "scenes/builder.h"
+#include "scenes/person.h"
+#include "scenes/textures.h"
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+namespace segslam::scenes {
+namespace {
+
+constexpr double kCurbHeightM = 0.15;
+constexpr double kGroundFloorM = 4.2;  // shop floor height
+constexpr double kFloorM = 3.2;        // upper floor height
+constexpr double kBayM = 3.3;          // window bay width
+constexpr int kFacadeFloors = 3, kFacadeBays = 4;
+
+using Vec2 = Eigen::Vector2d;
+using Vec3 = Eigen::Vector3d;
+using Node = std::pair<int, int>;
+
+Vec2 Right(const Vec2& d) { return Vec2(d.y(), -d.x()); }
+Vec3 At(const Vec2& p, double z) { return Vec3(p.x(), p.y(), z); }
+double YawOf(const Vec2& d) { return std::atan2(d.y(), d.x()); }
+
+// A directed street edge between neighbouring nodes.
+struct Edge {
+  Node from, to;
+  bool operator<(const Edge& o) const { return std::tie(from, to) < std::tie(o.from, o.to); }
+};
+
+// Materials and textures the city uses, by role.
+struct CityLook {
+  std::vector<int> facades, shopfronts;  // materials
+  int asphalt, sidewalk, concrete, crosswalk, paint, bark, metal, dark_metal, plate, glass;
+  int car_paint_texture, clothes_textures[6], skin_texture;
+  int rubber, chrome, headlight, taillight, stop_sign, traffic_lamps, wood, red_paint;
+  std::vector<int> foliage;
+};
+
+class CityBuilder {
+ public:
+  explicit CityBuilder(const Scenario& s) : s_(s), spec_(s.city), b_(&world_) {
+    block_ = spec_.block_size_m;
+    road_ = spec_.road_width_m;
+    walk_ = spec_.sidewalk_width_m;
+    lane_ = std::max(1.5, road_ / 2 - 3.2);
+    curb_car_ = road_ / 2 - 1.05;
+  }
+
+  World Build() {
+    world_.name = s_.name;
+    world_.kind = "city";
+    world_.seed = s_.seed;
+    world_.camera = s_.camera;
+    world_.sky_rgb = Eigen::Vector3f(0.62f, 0.74f, 0.9f);
+    MakeLook();
+    PlanRoute();
+    MakeGround();
+    MakeBlocks();
+    MakeStreets();
+    MakeCameraRoutes();
+    MakeParkedCars();
+    MakeMovingCars();
+    MakePedestrians();
+    MakeLights();
+    return std::move(world_);
+  }
+
+ private:
+  Vec2 NodePos(const Node& n) const { return Vec2(n.first * block_, n.second * block_); }
+
+  std::mt19937_64 Rng(const std::string& tag, std::uint64_t i = 0) const {
+    return std::mt19937_64(SubSeed(s_.seed, tag, i));
+  }
+
+  // ---- Textures and materials ------------------------------------------------------
+  void MakeLook() {
+    const std::uint64_t seed = s_.seed;
+    auto tex = [&](const std::string& name, cv::Mat img, double u, double v) {
+      return b_.AddTexture(name, std::move(img), Vec2(u, v));
+    };
+    auto mat = [&](const std::string& name, int t, Eigen::Vector4f rgba, float spec = 0.1f) {
+      return b_.AddMaterial(name, t, rgba, spec);
+    };
+    const Eigen::Vector4f white(1, 1, 1, 1);
+    const FacadeStyle styles[4] = {FacadeStyle::kBrick, FacadeStyle::kConcrete, FacadeStyle::kGlass,
+                                   FacadeStyle::kPlaster};
+    for (int i = 0; i < 8; ++i) {
+      const int t = tex("facade_" + std::to_string(i),
+                        FacadeTexture(SubSeed(seed, "facade", i), styles[i % 4], kFacadeFloors, kFacadeBays),
+                        kFacadeBays * kBayM, kFacadeFloors * kFloorM);
+      facade_textures_.push_back(t);
+    }
+    for (int i = 0; i < 4; ++i) {
+      const int t = tex("shopfront_" + std::to_string(i), ShopfrontTexture(SubSeed(seed, "shop", i)),
+                        kFacadeBays * kBayM, kGroundFloorM);
+      shop_textures_.push_back(t);
+    }
+    look_.asphalt = mat("asphalt", tex("asphalt", AsphaltTexture(SubSeed(seed, "asphalt")), 5, 5), white, 0.05f);
+    look_.sidewalk = mat("sidewalk", tex("sidewalk", SidewalkTexture(SubSeed(seed, "sidewalk")), 3, 3), white);
+    look_.concrete = mat("concrete", tex("concrete", ConcreteTexture(SubSeed(seed, "concrete")), 2, 2), white);
+    look_.crosswalk = mat("crosswalk", tex("crosswalk", CrosswalkTexture(SubSeed(seed, "crosswalk")), 1.0, 3.0), white);
+    look_.paint = mat("road_paint", tex("road_paint", PaintTexture(SubSeed(seed, "paint")), 1, 1), white);
+    look_.bark = mat("bark", tex("bark", BarkTexture(SubSeed(seed, "bark")), 1, 1), white);
+    const int metal_t = tex("metal", MetalTexture(SubSeed(seed, "metal")), 0.5, 0.5);
+    look_.metal = mat("metal", metal_t, Eigen::Vector4f(0.75f, 0.78f, 0.78f, 1), 0.4f);
+    look_.dark_metal = mat("dark_metal", metal_t, Eigen::Vector4f(0.3f, 0.32f, 0.3f, 1), 0.4f);
+    look_.plate = mat("plate", tex("plate", PlateTexture(SubSeed(seed, "plate")), 0.52, 0.13), white);
+    look_.glass = mat("car_glass", tex("car_glass", CarGlassTexture(SubSeed(seed, "glass")), 1.2, 0.5), white, 0.6f);
+    look_.car_paint_texture = tex("car_paint", CarPaintTexture(SubSeed(seed, "carpaint")), 2.0, 2.0);
+    for (int i = 0; i < 6; ++i) {
+      look_.clothes_textures[i] = tex("cloth_" + std::to_string(i), ClothTexture(SubSeed(seed, "cloth", i), i), 0.5, 0.5);
+    }
+    look_.skin_texture = tex("skin", SkinTexture(SubSeed(seed, "skin")), 0.2, 0.2);
+    look_.rubber = mat("rubber", -1, Eigen::Vector4f(0.08f, 0.08f, 0.08f, 1));
+    look_.chrome = mat("chrome", -1, Eigen::Vector4f(0.7f, 0.7f, 0.72f, 1), 0.8f);
+    look_.headlight = mat("headlight", -1, Eigen::Vector4f(0.95f, 0.95f, 0.85f, 1), 0.8f);
+    look_.taillight = mat("taillight", -1, Eigen::Vector4f(0.7f, 0.05f, 0.05f, 1), 0.6f);
+    look_.stop_sign = mat("stop_sign", tex("stop_sign", StopSignTexture(SubSeed(seed, "stop")), 0.75, 0.75), white);
+    look_.traffic_lamps = mat("traffic_lamps", tex("traffic_lamps", TrafficLightTexture(SubSeed(seed, "tl")), 0.35, 0.9), white);
+    look_.wood = mat("bench_wood", tex("bench_wood", WoodTexture(SubSeed(seed, "bench")), 1, 1), white);
+    look_.red_paint = mat("hydrant_red", -1, Eigen::Vector4f(0.75f, 0.1f, 0.08f, 1), 0.3f);
+    const int foliage_t = tex("foliage", FoliageTexture(SubSeed(seed, "foliage")), 2.5, 2.5);
+    for (int i = 0; i < 3; ++i) {
+      look_.foliage.push_back(mat("foliage_" + std::to_string(i), foliage_t,
+                                  Eigen::Vector4f(0.8f + 0.1f * i, 1.0f, 0.8f + 0.08f * i, 1)));
+    }
+  }
+
+  // ---- Route on the street grid ------------------------------------------------------
+  // A random walk over intersections (straight more often than turning, never reusing a
+  // street if it can avoid it), then the right-hand lane through it with rounded turns.
+  void PlanRoute() {
+    std::mt19937_64 rng = Rng("route");
+    const Vec2 dirs[4] = {Vec2(1, 0), Vec2(0, 1), Vec2(-1, 0), Vec2(0, -1)};
+    int dir = UniformInt(rng, 0, 3);
+    Node node{0, 0};
+    nodes_ = {node};
+    dirs_ = {dir};
+    std::set<std::pair<Node, Node>> used;
+    // Enough streets for the route plus the half block before the first node.
+    const int edges_needed = static_cast<int>(std::ceil(spec_.route_length_m / block_)) + 2;
+    for (int e = 0; e < edges_needed; ++e) {
+      // Candidate directions: straight, left, right, in random preference.
+      std::vector<int> options = {dir, (dir + 1) % 4, (dir + 3) % 4};
+      const double r = Uniform(rng, 0, 1);
+      if (r > 0.55) std::swap(options[0], options[r > 0.775 ? 1 : 2]);
+      int chosen = options[0];
+      for (int o : options) {
+        const Node next{node.first + static_cast<int>(dirs[o].x()), node.second + static_cast<int>(dirs[o].y())};
+        if (!used.count({std::min(node, next), std::max(node, next)})) {
+          chosen = o;
+          break;
+        }
+      }
+      const Node next{node.first + static_cast<int>(dirs[chosen].x()), node.second + static_cast<int>(dirs[chosen].y())};
+      used.insert({std::min(node, next), std::max(node, next)});
+      node = next;
+      dir = chosen;
+      nodes_.push_back(node);
+      dirs_.push_back(dir);
+    }
+    // dirs_[k] is the direction arriving at nodes_[k] (k >= 1); dirs_[0] = leaving node 0.
+    dirs_[0] = dirs_[1];
+
+    // Grid bounds: one block of margin around the route for streets with buildings on
+    // both sides, and a second ring of blocks so views down streets end in buildings.
+    imin_ = imax_ = jmin_ = jmax_ = 0;
+    for (const Node& n : nodes_) {
+      imin_ = std::min(imin_, n.first);
+      imax_ = std::max(imax_, n.first);
+      jmin_ = std::min(jmin_, n.second);
+      jmax_ = std::max(jmax_, n.second);
+    }
+    imin_ -= 1, jmin_ -= 1, imax_ += 1, jmax_ += 1;
+
+    // Directed route edges (the one leading into node 0 included).
+    const Node before{nodes_[0].first - static_cast<int>(dirs[dirs_[0]].x()),
+                      nodes_[0].second - static_cast<int>(dirs[dirs_[0]].y())};
+    route_edges_.insert({before, nodes_[0]});
+    for (std::size_t k = 1; k < nodes_.size(); ++k) route_edges_.insert({nodes_[k - 1], nodes_[k]});
+
+    // Lane polyline: from mid-block before node 0, through rounded corners.
+    const double radius = std::min(6.0, block_ / 5);
+    auto dvec = [&](int d) { return dirs[d]; };
+    std::vector<Vec2> pts;
+    const Vec2 d0 = dvec(dirs_[0]);
+    pts.push_back(NodePos(nodes_[0]) - d0 * (block_ / 2) + Right(d0) * lane_);
+    for (std::size_t k = 1; k + 1 < nodes_.size(); ++k) {
+      const Vec2 a = dvec(dirs_[k]), b = dvec(dirs_[k + 1]);
+      if (dirs_[k] == dirs_[k + 1]) continue;
+      const Vec2 corner = NodePos(nodes_[k]) + Right(a) * lane_ + Right(b) * lane_;
+      const Vec2 centre = corner - a * radius + b * radius;
+      for (int i = 0; i <= 12; ++i) {
+        const double th = 0.5 * M_PI * i / 12;
+        pts.push_back(centre + radius * (-b * std::cos(th) + a * std::sin(th)));
+      }
+    }
+    const Vec2 dl = dvec(dirs_.back());
+    pts.push_back(NodePos(nodes_.back()) + Right(dl) * lane_);
+
+    // Densify and cut at the route length.
+    lane_pts_.clear();
+    lane_s_.clear();
+    double s = 0;
+    for (std::size_t i = 0; i + 1 < pts.size() && s < spec_.route_length_m; ++i) {
+      const double len = (pts[i + 1] - pts[i]).norm();
+      const int n = std::max(1, static_cast<int>(std::ceil(len / 0.25)));
+      for (int k = 0; k < n; ++k) {
+        const Vec2 p = pts[i] + (pts[i + 1] - pts[i]) * (static_cast<double>(k) / n);
+        if (!lane_pts_.empty()) s += (p - lane_pts_.back()).norm();
+        lane_pts_.push_back(p);
+        lane_s_.push_back(s);
+        if (s >= spec_.route_length_m) break;
+      }
+    }
+  }
+
+  Vec2 LaneAt(double s) const {
+    s = std::clamp(s, 0.0, lane_s_.back());
+    const auto it = std::upper_bound(lane_s_.begin(), lane_s_.end(), s);
+    const std::size_t i = std::clamp<std::size_t>(it - lane_s_.begin(), 1, lane_s_.size() - 1);
+    const double seg = lane_s_[i] - lane_s_[i - 1];
+    const double u = seg > 0 ? (s - lane_s_[i - 1]) / seg : 0;
+    return lane_pts_[i - 1] + u * (lane_pts_[i] - lane_pts_[i - 1]);
+  }
+
+  // ---- Static scenery ----------------------------------------------------------------
+  void MakeGround() {
+    // The asphalt plane under everything; streets are what sidewalks do not cover.
+    const double margin = 2.5 * block_;
+    const Vec2 lo = Vec2((imin_ - 1) * block_ - margin, (jmin_ - 1) * block_ - margin);
+    const Vec2 hi = Vec2((imax_ + 1) * block_ + margin, (jmax_ + 1) * block_ + margin);
+    Geom g;
+    g.shape = Shape::kPlane;
+    g.size = Vec3(0.5 * (hi.x() - lo.x()), 0.5 * (hi.y() - lo.y()), 0);
+    g.T_parent_geom.translation() = At(0.5 * (lo + hi), 0);
+    g.material = look_.asphalt;
+    world_.static_geoms.push_back(g);
+  }
+
+  // A block between street lines i..i+1 and j..j+1: a raised sidewalk slab and
+  // buildings on lots around its edge.
+  void MakeBlocks() {
+    for (int i = imin_ - 1; i <= imax_; ++i) {
+      for (int j = jmin_ - 1; j <= jmax_; ++j) {
+        std::mt19937_64 rng = Rng("block", static_cast<std::uint64_t>((i + 1000) * 4096 + (j + 1000)));
+        const Vec2 lo = NodePos({i, j}) + Vec2::Constant(road_ / 2);
+        const Vec2 hi = NodePos({i + 1, j + 1}) - Vec2::Constant(road_ / 2);
+        world_.static_geoms.push_back(MakeBox(At(0.5 * (lo + hi), kCurbHeightM / 2),
+                                              At(0.5 * (hi - lo), kCurbHeightM / 2), look_.sidewalk));
+        // Lots: 2-3 columns by 2 rows, all touching a street.
+        const Vec2 in_lo = lo + Vec2::Constant(walk_), in_hi = hi - Vec2::Constant(walk_);
+        const int nx = UniformInt(rng, 2, 3);
+        std::vector<double> xs = {in_lo.x()}, ys = {in_lo.y(), 0.5 * (in_lo.y() + in_hi.y()) + Uniform(rng, -2, 2), in_hi.y()};
+        for (int k = 1; k < nx; ++k) {
+          xs.push_back(in_lo.x() + (in_hi.x() - in_lo.x()) * (k + Uniform(rng, -0.15, 0.15)) / nx);
+        }
+        xs.push_back(in_hi.x());
+        for (int a = 0; a + 1 < static_cast<int>(xs.size()); ++a) {
+          for (int c = 0; c < 2; ++c) {
+            MakeBuilding(rng, Vec2(xs[a], ys[c]), Vec2(xs[a + 1], ys[c + 1]));
+          }
+        }
+      }
+    }
+  }
+
+  void MakeBuilding(std::mt19937_64& rng, Vec2 lo, Vec2 hi) {
+    // Occasional setback from the street and narrow gaps between neighbours.
+    const double setback = Chance(rng, 0.25) ? Uniform(rng, 0.3, 1.5) : 0.0;
+    lo += Vec2::Constant(setback * 0.5 + 0.1);
+    hi -= Vec2::Constant(setback * 0.5 + 0.1);
+    const double height = Chance(rng, 0.3) ? Uniform(rng, 22, 40) : Uniform(rng, 8, 22);
+    const Vec2 c = 0.5 * (lo + hi), half = 0.5 * (hi - lo);
+    // Each building its own facade and tint, so neighbours look different.
+    const int facade_t = facade_textures_[UniformInt(rng, 0, static_cast<int>(facade_textures_.size()) - 1)];
+    const float tint = static_cast<float>(Uniform(rng, 0.8, 1.0));
+    const int facade = b_.AddMaterial("building_facade", facade_t,
+                                      Eigen::Vector4f(tint, tint * static_cast<float>(Uniform(rng, 0.93, 1.0)), tint, 1));
+    const int shop_t = shop_textures_[UniformInt(rng, 0, static_cast<int>(shop_textures_.size()) - 1)];
+    const bool shops = Chance(rng, 0.7);
+    const double z0 = kCurbHeightM;
+    if (shops) {
+      const int shop = b_.AddMaterial("building_shops", shop_t, Eigen::Vector4f(1, 1, 1, 1));
+      world_.static_geoms.push_back(MakeBox(At(c, z0 + kGroundFloorM / 2), At(half, kGroundFloorM / 2), shop));
+      world_.static_geoms.push_back(MakeBox(At(c, z0 + kGroundFloorM + (height - kGroundFloorM) / 2),
+                                            At(half - Vec2::Constant(0.05), (height - kGroundFloorM) / 2), facade));
+    } else {
+      world_.static_geoms.push_back(MakeBox(At(c, z0 + height / 2), At(half, height / 2), facade));
+    }
+    // A roof edge that breaks the silhouette.
+    world_.static_geoms.push_back(MakeBox(At(c, z0 + height + 0.4), At(half + Vec2::Constant(0.15), 0.4), look_.concrete));
+  }
+
+  // Markings, furniture and fixed COCO objects along every street of the inner grid.
+  void MakeStreets() {
+    std::mt19937_64 rng = Rng("streets");
+    for (int i = imin_; i <= imax_; ++i) {
+      for (int j = jmin_; j <= jmax_; ++j) {
+        const Node n{i, j};
+        // Streets leaving this node in +x and +y.
+        for (int axis = 0; axis < 2; ++axis) {
+          const Node m = axis == 0 ? Node{i + 1, j} : Node{i, j + 1};
+          if (m.first > imax_ || m.second > jmax_) continue;
+          MakeStreetSegment(rng, n, m);
+        }
+        MakeIntersection(rng, n);
+      }
+    }
+  }
+
+  bool OnRoute(const Node& a, const Node& b) const {
+    return route_edges_.count({a, b}) || route_edges_.count({b, a});
+  }
+
+  void MakeStreetSegment(std::mt19937_64& rng, const Node& a, const Node& b) {
+    const Vec2 pa = NodePos(a), pb = NodePos(b);
+    const Vec2 d = (pb - pa).normalized(), r = Right(d);
+    const double yaw = YawOf(d);
+    const double clear = road_ / 2 + 4.0;  // past the crosswalks
+    const double len = block_ - 2 * clear;
+    // Centre line: dashes 3 m long every 9 m.
+    for (double s = clear; s + 3.0 <= block_ - clear + 1e-9; s += 9.0) {
+      world_.static_geoms.push_back(MakeBox(At(pa + d * (s + 1.5), 0.006), Vec3(1.5, 0.075, 0.006), look_.paint, yaw));
+    }
+    // Edge lines along both curbs.
+    for (double side : {-1.0, 1.0}) {
+      world_.static_geoms.push_back(MakeBox(At(pa + d * (block_ / 2) + r * side * (road_ / 2 - 0.35), 0.006),
+                                            Vec3(len / 2 + 2.5, 0.06, 0.006), look_.paint, yaw));
+    }
+    // Sidewalk furniture on both sides: trees, lamps, benches, hydrants, parking slots.
+    for (double side : {-1.0, 1.0}) {
+      const Vec2 curb = r * side * (road_ / 2);
+      const Vec2 out = r * side;  // from the road toward the buildings
+      double s = clear + Uniform(rng, 0, 4);
+      int k = 0;
+      while (s < block_ - clear) {
+        const Vec2 p = pa + d * s + curb + out * 0.7;
+        if (k % 3 == 1) {
+          MakeLamp(p, -out);
+        } else {
+          MakeTree(rng, p);
+        }
+        s += Uniform(rng, 8, 13);
+        ++k;
+      }
+      // Parking slots along the curb, heading with the traffic on that side.
+      const Vec2 heading = side > 0 ? d : Vec2(-d);
+      const bool on_route = OnRoute(a, b);
+      for (double t = clear + 1.0; t + 7.0 <= block_ - clear + 2.0; t += 7.0) {
+        Slot slot;
+        slot.centre = pa + d * (t + 3.5) + r * side * curb_car_;
+        slot.yaw = YawOf(heading);
+        slot.on_route = on_route;
+        slots_.push_back(slot);
+      }
+      // A few fixed COCO objects near the route: benches and hydrants.
+      if (on_route && Chance(rng, 0.5)) {
+        MakeBench(pa + d * Uniform(rng, clear + 2, block_ - clear - 2) + curb + out * (walk_ - 0.45), YawOf(-out));
+      }
+      if (on_route && Chance(rng, 0.5)) {
+        MakeHydrant(pa + d * Uniform(rng, clear, block_ - clear) + curb + out * 0.45);
+      }
+    }
+  }
+
+  void MakeIntersection(std::mt19937_64& rng, const Node& n) {
+    const Vec2 c = NodePos(n);
+    const Vec2 dirs[4] = {Vec2(1, 0), Vec2(0, 1), Vec2(-1, 0), Vec2(0, -1)};
+    // Crosswalks on all four arms, stripes along the street (texture u across it).
+    for (const Vec2& d : dirs) {
+      const Vec2 p = c + d * (road_ / 2 + 2.0);
+      world_.static_geoms.push_back(MakeBox(At(p, 0.007), Vec3(road_ / 2 - 0.6, 1.5, 0.007), look_.crosswalk, YawOf(Right(d))));
+      // Stop line before the crosswalk on the incoming lane.
+      world_.static_geoms.push_back(MakeBox(At(c + d * (road_ / 2 + 4.0) + Right(-d) * (road_ / 4), 0.007),
+                                            Vec3(0.2, road_ / 4 - 0.3, 0.007), look_.paint, YawOf(d)));
+    }
+    // Near the route: traffic lights at two corners, or a stop sign.
+    bool near_route = false;
+    for (const Node& m : nodes_) near_route |= std::abs(m.first - n.first) + std::abs(m.second - n.second) <= 1;
+    if (!near_route) return;
+    const double q = road_ / 2 + 0.5;
+    if (Chance(rng, 0.6)) {
+      MakeTrafficLight(c + Vec2(q, -q), Vec2(-1, 0));
+      MakeTrafficLight(c + Vec2(-q, q), Vec2(1, 0));
+    } else {
+      MakeStopSign(c + Vec2(-q, -q), Vec2(0, -1));
+    }
+  }
+
+  void MakeTree(std::mt19937_64& rng, const Vec2& p) {
+    const double h = Uniform(rng, 3.0, 4.5), crown = Uniform(rng, 1.6, 2.4);
+    world_.static_geoms.push_back(MakeRod(At(p, kCurbHeightM), At(p, kCurbHeightM + h + 0.5), Uniform(rng, 0.12, 0.2), look_.bark));
+    const int foliage = look_.foliage[UniformInt(rng, 0, 2)];
+    world_.static_geoms.push_back(MakeShape(Shape::kEllipsoid, At(p, kCurbHeightM + h + crown * 0.8),
+                                            Vec3(crown, crown * Uniform(rng, 0.85, 1.1), crown * 1.1), foliage,
+                                            Eigen::AngleAxisd(Uniform(rng, 0, M_PI), Vec3::UnitZ()).matrix()));
+    // A second, smaller crown for an irregular outline.
+    world_.static_geoms.push_back(MakeShape(Shape::kEllipsoid, At(p + Vec2(Uniform(rng, -0.8, 0.8), Uniform(rng, -0.8, 0.8)), kCurbHeightM + h + crown * 1.5),
+                                            Vec3::Constant(crown * 0.65), foliage));
+    // A tree grate around the trunk.
+    world_.static_geoms.push_back(MakeBox(At(p, kCurbHeightM + 0.005), Vec3(0.6, 0.6, 0.005), look_.dark_metal));
+  }
+
+  void MakeLamp(const Vec2& p, const Vec2& toward_road) {
+    const double h = 6.0;
+    world_.static_geoms.push_back(MakeRod(At(p, kCurbHeightM), At(p, kCurbHeightM + h), 0.08, look_.dark_metal));
+    const Vec2 tip = p + toward_road * 1.4;
+    world_.static_geoms.push_back(MakeRod(At(p, kCurbHeightM + h - 0.1), At(tip, kCurbHeightM + h + 0.15), 0.05, look_.dark_metal));
+    world_.static_geoms.push_back(MakeBox(At(tip, kCurbHeightM + h + 0.05), Vec3(0.35, 0.16, 0.08), look_.metal, YawOf(toward_road)));
+    // A sign board on some poles.
+    world_.static_geoms.push_back(MakeBox(At(p + toward_road * 0.12, kCurbHeightM + 2.6), Vec3(0.02, 0.3, 0.4), look_.plate, YawOf(toward_road)));
+  }
+
+  // ---- Fixed COCO objects --------------------------------------------------------------
+  Object& Fixed(const std::string& category, const Vec2& p, double yaw) {
+    Object& o = b_.AddObject(category);
+    o.parts.push_back(Part{category, {}});
+    for (Placement& pl : o.placement) pl.T_world_object = PoseXYZYaw(At(p, kCurbHeightM), yaw);
+    return o;
+  }
+
+  void MakeTrafficLight(const Vec2& p, const Vec2& facing) {
+    Object& o = Fixed("traffic light", p, YawOf(facing));
+    auto& g = o.parts[0].geoms;
+    g.push_back(MakeRod(Vec3(0, 0, 0), Vec3(0, 0, 3.2), 0.07, look_.dark_metal));
+    g.push_back(MakeBox(Vec3(0.05, 0, 3.65), Vec3(0.12, 0.17, 0.45), look_.traffic_lamps));
+    g.push_back(MakeBox(Vec3(-0.06, 0, 3.65), Vec3(0.02, 0.25, 0.55), look_.dark_metal));
+  }
+
+  void MakeStopSign(const Vec2& p, const Vec2& facing) {
+    Object& o = Fixed("stop sign", p, YawOf(facing));
+    auto& g = o.parts[0].geoms;
+    g.push_back(MakeRod(Vec3(0, 0, 0), Vec3(0, 0, 2.2), 0.035, look_.metal));
+    g.push_back(MakeBox(Vec3(0.04, 0, 2.35), Vec3(0.015, 0.375, 0.375), look_.stop_sign));
+  }
+
+  void MakeHydrant(const Vec2& p) {
+    Object& o = Fixed("fire hydrant", p, 0.0);
+    auto& g = o.parts[0].geoms;
+    g.push_back(MakeShape(Shape::kCylinder, Vec3(0, 0, 0.35), Vec3(0.13, 0.35, 0), look_.red_paint));
+    g.push_back(MakeShape(Shape::kSphere, Vec3(0, 0, 0.72), Vec3(0.14, 0, 0), look_.red_paint));
+    g.push_back(MakeRod(Vec3(0, -0.22, 0.48), Vec3(0, 0.22, 0.48), 0.05, look_.chrome));
+    g.push_back(MakeRod(Vec3(0, 0, 0.48), Vec3(0.2, 0, 0.48), 0.06, look_.red_paint));
+  }
+
+  void MakeBench(const Vec2& p, double yaw) {
+    Object& o = Fixed("bench", p, yaw);
+    auto& g = o.parts[0].geoms;
+    g.push_back(MakeBox(Vec3(0, 0, 0.45), Vec3(0.22, 0.9, 0.03), look_.wood));
+    g.push_back(MakeBox(Vec3(-0.22, 0, 0.75), Vec3(0.03, 0.9, 0.2), look_.wood));
+    for (double y : {-0.8, 0.8}) g.push_back(MakeBox(Vec3(0, y, 0.21), Vec3(0.2, 0.03, 0.21), look_.dark_metal));
+  }
+
+  // ---- Cars ----------------------------------------------------------------------------
+  // A car, truck or bus as one rigid part; object frame on the ground at the centre,
+  // x forward.
+  Part MakeVehicle(std::mt19937_64& rng, const std::string& kind) {
+    static const Eigen::Vector4f kPalette[] = {
+        {0.95f, 0.95f, 0.95f, 1}, {0.08f, 0.08f, 0.09f, 1}, {0.6f, 0.62f, 0.65f, 1}, {0.7f, 0.08f, 0.07f, 1},
+        {0.1f, 0.2f, 0.55f, 1},   {0.35f, 0.36f, 0.38f, 1}, {0.1f, 0.3f, 0.15f, 1},  {0.95f, 0.75f, 0.1f, 1},
+        {0.5f, 0.25f, 0.1f, 1},   {0.3f, 0.5f, 0.7f, 1}};
+    const Eigen::Vector4f colour = kPalette[UniformInt(rng, 0, 9)];
+    const int paint = b_.AddMaterial(kind + "_paint", look_.car_paint_texture, colour, 0.5f, 0.5f);
+    Part part{"body", {}};
+    auto& g = part.geoms;
+    auto wheels = [&](double L, double W, double r) {
+      const Eigen::Matrix3d R = Eigen::AngleAxisd(M_PI / 2, Vec3::UnitX()).matrix();
+      for (double x : {-0.33 * L, 0.33 * L}) {
+        for (double y : {-1.0, 1.0}) {
+          g.push_back(MakeShape(Shape::kCylinder, Vec3(x, y * (W / 2 - 0.14), r), Vec3(r, 0.12, 0), look_.rubber, R));
+          g.push_back(MakeShape(Shape::kCylinder, Vec3(x, y * (W / 2 - 0.01), r), Vec3(r * 0.55, 0.005, 0), look_.chrome, R));
+        }
+      }
+    };
+    auto lights_and_plates = [&](double L, double W, double z) {
+      for (double y : {-1.0, 1.0}) {
+        g.push_back(MakeBox(Vec3(L / 2, y * (W / 2 - 0.22), z), Vec3(0.02, 0.16, 0.06), look_.headlight));
+        g.push_back(MakeBox(Vec3(-L / 2, y * (W / 2 - 0.2), z), Vec3(0.02, 0.14, 0.07), look_.taillight));
+      }
+      g.push_back(MakeBox(Vec3(L / 2 + 0.01, 0, z - 0.2), Vec3(0.01, 0.26, 0.065), look_.plate));
+      g.push_back(MakeBox(Vec3(-L / 2 - 0.01, 0, z - 0.1), Vec3(0.01, 0.26, 0.065), look_.plate));
+    };
+    if (kind == "truck") {
+      const double L = Uniform(rng, 6.0, 7.0), W = 2.3;
+      g.push_back(MakeBox(Vec3(L / 2 - 0.9, 0, 1.45), Vec3(0.9, W / 2, 0.95), paint));           // cab
+      g.push_back(MakeBox(Vec3(L / 2 - 0.35, 0, 1.85), Vec3(0.36, W / 2 - 0.08, 0.4), look_.glass));  // windscreen
+      const int cargo = b_.AddMaterial("truck_cargo", look_.car_paint_texture, Eigen::Vector4f(0.92f, 0.92f, 0.9f, 1));
+      g.push_back(MakeBox(Vec3(-0.95, 0, 1.9), Vec3(L / 2 - 0.95, W / 2, 1.35), cargo));          // box
+      g.push_back(MakeBox(Vec3(-0.95, W / 2 + 0.005, 2.0), Vec3(1.6, 0.005, 0.6), look_.plate));  // logo
+      g.push_back(MakeBox(Vec3(0, 0, 0.55), Vec3(L / 2, W / 2 - 0.1, 0.12), look_.dark_metal));   // chassis
+      wheels(L, W, 0.45);
+      lights_and_plates(L, W, 0.75);
+    } else if (kind == "bus") {
+      const double L = 11.0, W = 2.5;
+      g.push_back(MakeBox(Vec3(0, 0, 1.75), Vec3(L / 2, W / 2, 1.3), paint));
+      g.push_back(MakeBox(Vec3(0, 0, 2.15), Vec3(L / 2 - 0.4, W / 2 + 0.01, 0.5), look_.glass));
+      g.push_back(MakeBox(Vec3(L / 2 + 0.01, 0, 2.0), Vec3(0.01, W / 2 - 0.1, 0.8), look_.glass));
+      wheels(L * 0.85, W, 0.5);
+      lights_and_plates(L, W, 0.8);
+    } else {
+      const double L = Uniform(rng, 4.1, 4.8), W = Uniform(rng, 1.75, 1.9), hb = Uniform(rng, 0.32, 0.4);
+      const double cabin_l = L * Uniform(rng, 0.45, 0.6);
+      g.push_back(MakeBox(Vec3(0, 0, 0.28 + hb), Vec3(L / 2, W / 2, hb), paint));  // lower body
+      g.push_back(MakeBox(Vec3(-0.08 * L, 0, 0.28 + 2 * hb + 0.24), Vec3(cabin_l / 2, W / 2 - 0.1, 0.24), look_.glass));
+      g.push_back(MakeBox(Vec3(-0.08 * L, 0, 0.28 + 2 * hb + 0.5), Vec3(cabin_l / 2 - 0.1, W / 2 - 0.12, 0.025), paint));  // roof
+      g.push_back(MakeBox(Vec3(L / 2 - 0.05, 0, 0.4), Vec3(0.08, W / 2, 0.1), look_.rubber));    // bumpers
+      g.push_back(MakeBox(Vec3(-L / 2 + 0.05, 0, 0.4), Vec3(0.08, W / 2, 0.1), look_.rubber));
+      for (double y : {-1.0, 1.0}) {  // mirrors
+        g.push_back(MakeBox(Vec3(0.18 * L, y * (W / 2 + 0.08), 0.28 + 2 * hb + 0.1), Vec3(0.06, 0.08, 0.06), paint));
+      }
+      wheels(L, W, 0.32);
+      lights_and_plates(L, W, 0.28 + hb + 0.1);
+    }
+    return part;
+  }
+
+  std::string VehicleKind(std::mt19937_64& rng, bool allow_bus) {
+    const double r = Uniform(rng, 0, 1);
+    if (r < 0.12) return "truck";
+    if (allow_bus && r < 0.2) return "bus";
+    return "car";
+  }
+
+  struct Slot {
+    Vec2 centre;
+    double yaw = 0;
+    bool on_route = false;
+  };
+
+  // Parked cars at the curbs, most along the route; pass 2 relocates, removes, adds.
+  void MakeParkedCars() {
+    std::mt19937_64 rng = Rng("parked");
+    // Slot order: route slots first, each group shuffled.
+    std::vector<int> route_slots, other_slots;
+    for (int i = 0; i < static_cast<int>(slots_.size()); ++i) (slots_[i].on_route ? route_slots : other_slots).push_back(i);
+    Shuffle(route_slots, rng);
+    Shuffle(other_slots, rng);
+    std::vector<int> order = route_slots;
+    order.insert(order.end(), other_slots.begin(), other_slots.end());
+    std::size_t next_slot = 0;
+    auto take_slot = [&]() -> const Slot* {
+      return next_slot < order.size() ? &slots_[order[next_slot++]] : nullptr;
+    };
+    auto pose_of = [&](const Slot& slot) {
+      return PoseXYZYaw(At(slot.centre, 0.0), slot.yaw + Uniform(rng, -0.03, 0.03));
+    };
+
+    // Pass 1 cars.
+    std::vector<int> ids;
+    for (int k = 0; k < spec_.parked_cars; ++k) {
+      const Slot* slot = take_slot();
+      if (slot == nullptr) break;
+      Object& o = b_.AddObject(VehicleKind(rng, false));
+      o.parts.push_back(MakeVehicle(rng, o.category_name));
+      o.placement[0].T_world_object = pose_of(*slot);
+      o.placement[1] = o.placement[0];
+      ids.push_back(static_cast<int>(world_.objects.size()) - 1);
+    }
+    // Pass 2: relocate to a free slot, remove, add.
+    const ChangePlan plan = PlanSecondPass(static_cast<int>(ids.size()), s_.pass2, rng);
+    for (int k : plan.relocated) {
+      const Slot* slot = take_slot();
+      if (slot == nullptr) break;
+      world_.objects[ids[k]].placement[1].T_world_object = pose_of(*slot);
+    }
+    for (int k : plan.removed) world_.objects[ids[k]].placement[1].present = false;
+    for (int k = 0; k < s_.pass2.added; ++k) {
+      const Slot* slot = take_slot();
+      if (slot == nullptr) break;
+      Object& o = b_.AddObject(VehicleKind(rng, false));
+      o.parts.push_back(MakeVehicle(rng, o.category_name));
+      o.placement[0].present = false;
+      o.placement[1].T_world_object = pose_of(*slot);
+    }
+    parked_candidates_ = static_cast<int>(ids.size());
+  }
+
+  // A closed lane loop around the rectangle of blocks [i0, i1] x [j0, j1] (node
+  // indices), counter-clockwise or clockwise, at the right-hand lane.
+  std::vector<Node> LoopNodes(int i0, int j0, int i1, int j1, bool ccw) const {
+    std::vector<Node> n = {{i0, j0}, {i1, j0}, {i1, j1}, {i0, j1}};
+    if (!ccw) std::reverse(n.begin(), n.end());
+    return n;
+  }
+
+  PathMotion LanePath(const std::vector<Node>& loop, double offset, double z) const {
+    PathMotion path;
+    const int n = static_cast<int>(loop.size());
+    for (int k = 0; k < n; ++k) {
+      const Vec2 a = (NodePos(loop[k]) - NodePos(loop[(k + n - 1) % n])).normalized();
+      const Vec2 b = (NodePos(loop[(k + 1) % n]) - NodePos(loop[k])).normalized();
+      path.waypoints.push_back(At(NodePos(loop[k]) + Right(a) * offset + Right(b) * offset, z));
+    }
+    path.closed = true;
+    return path;
+  }
+
+  bool SharesRouteDirection(const std::vector<Node>& loop) const {
+    const int n = static_cast<int>(loop.size());
+    for (int k = 0; k < n; ++k) {
+      const Node a = loop[k], b = loop[(k + 1) % n];
+      // Walk every unit edge along the loop side.
+      const int di = (b.first > a.first) - (b.first < a.first), dj = (b.second > a.second) - (b.second < a.second);
+      for (Node p = a; p != b;) {
+        const Node q{p.first + di, p.second + dj};
+        if (route_edges_.count({p, q})) return true;
+        p = q;
+      }
+    }
+    return false;
+  }
+
+  void MakeMovingCars() {
+    std::mt19937_64 rng = Rng("moving_cars");
+    // Candidate loops: around one block or two, not driving the route's lane direction.
+    std::vector<PathMotion> loops;
+    for (int i = imin_; i < imax_; ++i) {
+      for (int j = jmin_; j < jmax_; ++j) {
+        for (int w = 1; w <= 2; ++w) {
+          for (bool ccw : {true, false}) {
+            const std::vector<Node> loop = LoopNodes(i, j, std::min(i + w, imax_), j + 1, ccw);
+            if (loop[0] == loop[1] || SharesRouteDirection(loop)) continue;
+            loops.push_back(LanePath(loop, lane_, 0.0));
+          }
+        }
+      }
+    }
+    Shuffle(loops, rng);
+    if (loops.empty()) {  // a loop around the outer ring always exists
+      loops.push_back(LanePath(LoopNodes(imin_, jmin_, imax_, jmax_, true), lane_, 0.0));
+    }
+    std::vector<int> placed;
+    for (int k = 0; k < spec_.moving_cars; ++k) {
+      Object& o = b_.AddObject(VehicleKind(rng, true));
+      o.parts.push_back(MakeVehicle(rng, o.category_name));
+      std::vector<PathMotion> mine;
+      for (std::size_t c = 0; c < loops.size(); ++c) mine.push_back(loops[(c + k * 3) % loops.size()]);
+      for (PathMotion& p : mine) p.speed_mps = spec_.moving_car_speed_mps * Uniform(rng, 0.85, 1.15);
+      PlaceOnPaths(&world_, rng, static_cast<int>(world_.objects.size()) - 1, mine, placed, /*min_camera_m=*/3.3, /*min_other_m=*/6.0, /*step_s=*/0.2);
+      placed.push_back(static_cast<int>(world_.objects.size()) - 1);
+    }
+  }
+
+  Object& MakePedestrian(std::mt19937_64& rng) {
+    Object& o = b_.AddObject("person");
+    o.articulation = Articulation::kWalker;
+    o.body_scale = Uniform(rng, 0.92, 1.08);
+    o.gait_phase_offset = Uniform(rng, 0, 1);
+    PersonLook look;
+    const float skin = static_cast<float>(Uniform(rng, 0.35, 0.95));
+    look.skin = b_.AddMaterial("skin", look_.skin_texture, Eigen::Vector4f(skin, skin * 0.78f, skin * 0.62f, 1));
+    look.hair = b_.AddMaterial("hair", -1, Eigen::Vector4f(0.1f, 0.07f, 0.05f, 1) * static_cast<float>(Uniform(rng, 0.5, 3.0)));
+    auto cloth = [&](const std::string& name) {
+      const Eigen::Vector4f c(static_cast<float>(Uniform(rng, 0.15, 1)), static_cast<float>(Uniform(rng, 0.15, 1)),
+                              static_cast<float>(Uniform(rng, 0.15, 1)), 1);
+      return b_.AddMaterial(name, look_.clothes_textures[UniformInt(rng, 0, 5)], c);
+    };
+    look.shirt = cloth("shirt");
+    look.pants = cloth("pants");
+    look.shoes = b_.AddMaterial("shoes", -1, Eigen::Vector4f(0.1f, 0.1f, 0.1f, 1) * static_cast<float>(Uniform(rng, 1, 4)));
+    world_.materials[look.hair].rgba.w() = 1;
+    world_.materials[look.shoes].rgba.w() = 1;
+    o.parts = MakePersonParts(look, o.body_scale);
+    return o;
+  }
+
+  // Pedestrians on sidewalk rings around blocks near the route; some walk around an
+  // intersection on its four crosswalks instead.
+  void MakePedestrians() {
+    std::mt19937_64 rng = Rng("pedestrians");
+    std::set<Node> near_blocks, near_nodes;
+    for (const Node& n : nodes_) {
+      near_nodes.insert(n);
+      for (int di = -1; di <= 0; ++di) {
+        for (int dj = -1; dj <= 0; ++dj) near_blocks.insert({n.first + di, n.second + dj});
+      }
+    }
+    // Sidewalk rings, both walking directions.
+    std::vector<PathMotion> rings;
+    const double ring = road_ / 2 + walk_ * 0.55;
+    for (const Node& blk : near_blocks) {
+      const Vec2 lo = NodePos(blk) + Vec2::Constant(ring), hi = NodePos({blk.first + 1, blk.second + 1}) - Vec2::Constant(ring);
+      for (bool ccw : {true, false}) {
+        PathMotion p;
+        p.waypoints = {At(lo, kCurbHeightM), At(Vec2(hi.x(), lo.y()), kCurbHeightM), At(hi, kCurbHeightM), At(Vec2(lo.x(), hi.y()), kCurbHeightM)};
+        if (!ccw) std::reverse(p.waypoints.begin(), p.waypoints.end());
+        rings.push_back(p);
+      }
+    }
+    // Crossing loops around intersections, stepping down from the curb onto the road.
+    std::vector<PathMotion> crossings;
+    const double q = road_ / 2 + 2.0;
+    for (const Node& n : near_nodes) {
+      const Vec2 c = NodePos(n);
+      const Vec2 corners[4] = {Vec2(q, q), Vec2(-q, q), Vec2(-q, -q), Vec2(q, -q)};
+      for (bool ccw : {true, false}) {
+        PathMotion p;
+        for (int k = 0; k < 4; ++k) {
+          const Vec2 a = corners[ccw ? k : 3 - k], b = corners[ccw ? (k + 1) % 4 : (6 - k) % 4];
+          const Vec2 d = (b - a).normalized();
+          p.waypoints.push_back(At(c + a, kCurbHeightM));
+          p.waypoints.push_back(At(c + a + d * (q - road_ / 2 - 0.15), kCurbHeightM));
+          p.waypoints.push_back(At(c + a + d * (q - road_ / 2 + 0.15), 0.0));
+          p.waypoints.push_back(At(c + b - d * (q - road_ / 2 + 0.15), 0.0));
+          p.waypoints.push_back(At(c + b - d * (q - road_ / 2 - 0.15), kCurbHeightM));
+        }
+        crossings.push_back(p);
+      }
+    }
+    Shuffle(rings, rng);
+    Shuffle(crossings, rng);
+    const int crossing_count = static_cast<int>(std::lround(spec_.crossing_share * spec_.pedestrians));
+    std::vector<int> people;
+    for (int k = 0; k < spec_.pedestrians; ++k) {
+      MakePedestrian(rng);
+      const std::vector<PathMotion>& pool = (k < crossing_count && !crossings.empty()) ? crossings : rings;
+      std::vector<PathMotion> mine;
+      for (std::size_t c = 0; c < pool.size(); ++c) mine.push_back(pool[(c + k) % pool.size()]);
+      const double speed = spec_.pedestrian_speed_mps * Uniform(rng, 0.85, 1.15);
+      for (PathMotion& p : mine) p.speed_mps = speed;
+      // Crossers must keep clear of the camera car as it drives through.
+      PlaceOnPaths(&world_, rng, static_cast<int>(world_.objects.size()) - 1, mine, people, /*min_camera_m=*/2.5, /*min_other_m=*/0.9, /*step_s=*/0.25);
+      people.push_back(static_cast<int>(world_.objects.size()) - 1);
+    }
+  }
+
+  // ---- Camera ----------------------------------------------------------------------------
+  void MakeCameraRoutes() {
+    const double v = spec_.camera_speed_mps;
+    const double duration = lane_s_.back() / v;
+    const int frames = static_cast<int>(std::floor(duration * s_.camera.fps + 1e-9)) + 1;
+    world_.frames_per_pass = {frames, frames};
+    std::mt19937_64 rng = Rng("camera_shake");
+    const SmoothNoise pitch = SmoothNoise::Make(rng, 0.7), roll = SmoothNoise::Make(rng, 0.5), bump = SmoothNoise::Make(rng, 1.1);
+    CameraRoute route;
+    const int keys = static_cast<int>(std::ceil(duration * s_.camera.fps)) + 1;
+    for (int k = 0; k < keys; ++k) {
+      const double t = std::min(duration, k / s_.camera.fps);
+      const double s = v * t;
+      // Heading from the lane tangent; a small ride shake in pitch, roll and height.
+      const Vec2 fwd = (LaneAt(s + 0.5) - LaneAt(s - 0.5)).normalized();
+      const Vec3 eye = At(LaneAt(s), spec_.camera_height_m + 0.01 * bump.Eval(t));
+      Eigen::Matrix3d R = LookAt(eye, eye + At(fwd, 0.0));
+      R = R * Eigen::AngleAxisd(0.003 * pitch.Eval(t), Vec3::UnitX()).matrix() *
+          Eigen::AngleAxisd(0.002 * roll.Eval(t), Vec3::UnitZ()).matrix();
+      CameraKey key;
+      key.stamp_s = t;
+      key.T_wc.linear() = R;
+      key.T_wc.translation() = eye;
+      if (!route.keys.empty() && t <= route.keys.back().stamp_s + 1e-9) continue;
+      route.keys.push_back(key);
+    }
+    world_.camera_route[0] = route;
+    world_.camera_route[1] = OffsetRoute(route, s_.pass2.camera_offset_m, s_.pass2.camera_yaw_offset_deg);
+  }
+
+  void MakeLights() {
+    Light sun;
+    sun.directional = true;
+    sun.direction = Vec3(-0.35, -0.25, -0.9).normalized();
+    sun.position = Vec3(0, 0, 100);
+    sun.diffuse = Eigen::Vector3f(0.75f, 0.72f, 0.66f);
+    sun.ambient = Eigen::Vector3f(0.38f, 0.4f, 0.44f);
+    sun.specular = Eigen::Vector3f(0.2f, 0.2f, 0.2f);
+    world_.lights.push_back(sun);
+    Light fill = sun;  // sky light from the other side, so shaded facades keep detail
+    fill.direction = Vec3(0.4, 0.3, -0.6).normalized();
+    fill.diffuse = Eigen::Vector3f(0.22f, 0.24f, 0.28f);
+    fill.ambient = Eigen::Vector3f::Zero();
+    fill.specular = Eigen::Vector3f::Zero();
+    world_.lights.push_back(fill);
+  }
+
+ public:
+  int parked_candidates_ = 0;
+
+ private:
+  const Scenario& s_;
+  const CitySpec& spec_;
+  World world_;
+  WorldBuilder b_;
+  CityLook look_;
+  std::vector<int> facade_textures_, shop_textures_;
+  double block_, road_, walk_, lane_, curb_car_;
+  std::vector<Node> nodes_;
+  std::vector<int> dirs_;
+  std::set<Edge> route_edges_;
+  int imin_ = 0, imax_ = 0, jmin_ = 0, jmax_ = 0;
+  std::vector<Vec2> lane_pts_;
+  std::vector<double> lane_s_;
+  std::vector<Slot> slots_;
+};
+
+}  // namespace
+
+World BuildCity(const Scenario& scenario) {
+  CityBuilder builder(scenario);
+  World world = builder.Build();
+  RecordSecondPassChanges(&world, builder.parked_candidates_);
+  return world;
+}
+
+}  // namespace segslam::scenes

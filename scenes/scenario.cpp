@@ -1,0 +1,476 @@
+// Scenario files: a strict, table-driven YAML reader. Every key a file may set is
+// registered once in FieldTable with its type and range; the same table writes the
+// effective configuration back (ScenarioToYaml) and serves ApplyOverride.
+#include "scenes/scenario.h"
+
+#include "core/error.h"
+
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <map>
+#include <sstream>
+
+namespace segslam::scenes {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Allowed interval of a number; open ends exclude the bound.
+struct Range {
+  double lo = -kInf;
+  double hi = kInf;
+  bool lo_open = false;
+  bool hi_open = false;
+
+  bool Contains(double v) const {
+    const bool above = lo_open ? v > lo : v >= lo;
+    const bool below = hi_open ? v < hi : v <= hi;
+    return above && below;
+  }
+};
+
+Range AtLeast(double lo) { return {lo, kInf, false, false}; }
+Range Closed(double lo, double hi) { return {lo, hi, false, false}; }
+Range OpenClosed(double lo, double hi) { return {lo, hi, true, false}; }
+Range Open(double lo, double hi) { return {lo, hi, true, true}; }
+
+std::string Num(double v) {
+  std::ostringstream out;
+  out << v;
+  return out.str();
+}
+
+std::string Describe(const Range& r) {
+  if (std::isinf(r.hi)) return std::string(r.lo_open ? "> " : ">= ") + Num(r.lo);
+  return std::string("in ") + (r.lo_open ? "(" : "[") + Num(r.lo) + ", " + Num(r.hi) +
+         (r.hi_open ? ")" : "]");
+}
+
+// "<origin>: <key>: <what>"
+Error KeyError(const std::string& origin, const std::string& key, const std::string& what) {
+  return Error(origin + ": " + key + ": " + what);
+}
+
+std::string ScalarText(const YAML::Node& node) {
+  if (node.IsScalar()) return node.Scalar();
+  if (node.IsSequence()) return "a list";
+  if (node.IsMap()) return "a mapping";
+  return "nothing";
+}
+
+double ReadNumber(const YAML::Node& node, const std::string& origin, const std::string& key) {
+  if (!node.IsScalar()) {
+    throw KeyError(origin, key, "expected a number (got " + ScalarText(node) + ")");
+  }
+  double v = 0;
+  try {
+    v = node.as<double>();
+  } catch (const YAML::Exception&) {
+    throw KeyError(origin, key, "expected a number (got '" + node.Scalar() + "')");
+  }
+  if (!std::isfinite(v)) {
+    throw KeyError(origin, key, "expected a finite number (got '" + node.Scalar() + "')");
+  }
+  return v;
+}
+
+// One settable key: how to read it into the scenario and how to write it back.
+struct Field {
+  std::function<void(const YAML::Node&)> read;
+  std::function<YAML::Node()> write;
+};
+
+// All keys of a scenario, bound to one Scenario object. Registration order is the
+// order ScenarioToYaml writes them.
+class FieldTable {
+ public:
+  FieldTable(Scenario* s, std::string origin) : origin_(std::move(origin)) {
+    Add("name", String(&s->name));
+    Add("kind", Choice(&s->kind, {"city", "office"}, "kind"));
+    Add("seed", Seed(&s->seed, "seed"));
+
+    CameraSpec& c = s->camera;
+    Add("camera.width", Int(&c.width, 16, 4096, "camera.width"));
+    Add("camera.height", Int(&c.height, 16, 4096, "camera.height"));
+    Add("camera.fovy_deg", Double(&c.fovy_deg, Open(10, 170), "camera.fovy_deg"));
+    Add("camera.fps", Double(&c.fps, OpenClosed(0, 240), "camera.fps"));
+    Add("camera.depth_factor", Double(&c.depth_factor, OpenClosed(0, 65535), "camera.depth_factor"));
+    Add("camera.near_m", Double(&c.near_m, Open(0, 10), "camera.near_m"));
+    Add("camera.far_m", Double(&c.far_m, OpenClosed(0, 100000), "camera.far_m"));
+
+    SensorSpec& n = s->sensor;
+    Add("sensor.enabled", Bool(&n.enabled, "sensor.enabled"));
+    Add("sensor.depth_noise_sigma_at_1m",
+        Double(&n.depth_noise_sigma_at_1m, Closed(0, 0.1), "sensor.depth_noise_sigma_at_1m"));
+    Add("sensor.depth_quantization",
+        Double(&n.depth_quantization, Closed(0, 1), "sensor.depth_quantization"));
+    Add("sensor.max_depth_m", Double(&n.max_depth_m, AtLeast(0), "sensor.max_depth_m"));
+    Add("sensor.min_depth_m", Double(&n.min_depth_m, AtLeast(0), "sensor.min_depth_m"));
+    Add("sensor.edge_dropout", Double(&n.edge_dropout, Closed(0, 1), "sensor.edge_dropout"));
+    Add("sensor.rgb_noise_sigma", Double(&n.rgb_noise_sigma, Closed(0, 50), "sensor.rgb_noise_sigma"));
+    Add("sensor.motion_blur", Bool(&n.motion_blur, "sensor.motion_blur"));
+    Add("sensor.exposure_s", Double(&n.exposure_s, Closed(0, 0.1), "sensor.exposure_s"));
+
+    SecondPassSpec& p = s->pass2;
+    Add("pass2.relocated_share", Double(&p.relocated_share, Closed(0, 1), "pass2.relocated_share"));
+    Add("pass2.removed_share", Double(&p.removed_share, Closed(0, 1), "pass2.removed_share"));
+    Add("pass2.added", Int(&p.added, 0, 200, "pass2.added"));
+    Add("pass2.camera_offset_m", Vec3(&p.camera_offset_m, Closed(-5, 5), "pass2.camera_offset_m"));
+    Add("pass2.camera_yaw_offset_deg",
+        Double(&p.camera_yaw_offset_deg, Closed(-180, 180), "pass2.camera_yaw_offset_deg"));
+
+    CitySpec& y = s->city;
+    Add("city.route_length_m", Double(&y.route_length_m, Closed(20, 2000), "city.route_length_m"));
+    Add("city.camera_speed_mps", Double(&y.camera_speed_mps, OpenClosed(0, 40), "city.camera_speed_mps"));
+    Add("city.camera_height_m", Double(&y.camera_height_m, Closed(0.3, 5), "city.camera_height_m"));
+    Add("city.block_size_m", Double(&y.block_size_m, Closed(25, 200), "city.block_size_m"));
+    Add("city.road_width_m", Double(&y.road_width_m, Closed(7, 30), "city.road_width_m"));
+    Add("city.sidewalk_width_m", Double(&y.sidewalk_width_m, Closed(1.5, 10), "city.sidewalk_width_m"));
+    Add("city.parked_cars", Int(&y.parked_cars, 0, 500, "city.parked_cars"));
+    Add("city.moving_cars", Int(&y.moving_cars, 0, 100, "city.moving_cars"));
+    Add("city.moving_car_speed_mps",
+        Double(&y.moving_car_speed_mps, Closed(0, 30), "city.moving_car_speed_mps"));
+    Add("city.pedestrians", Int(&y.pedestrians, 0, 300, "city.pedestrians"));
+    Add("city.pedestrian_speed_mps",
+        Double(&y.pedestrian_speed_mps, Closed(0, 3), "city.pedestrian_speed_mps"));
+    Add("city.crossing_share", Double(&y.crossing_share, Closed(0, 1), "city.crossing_share"));
+
+    OfficeSpec& o = s->office;
+    Add("office.camera_motion",
+        Choice(&o.camera_motion, {"xyz", "static", "rpy", "halfsphere"}, "office.camera_motion"));
+    Add("office.frames", Int(&o.frames, 1, 100000, "office.frames"));
+    Add("office.room_size_m", RoomSize(o.room_size_m, "office.room_size_m"));
+    Add("office.desks", Int(&o.desks, 1, 4, "office.desks"));
+    Add("office.moveable_objects", Int(&o.moveable_objects, 0, 60, "office.moveable_objects"));
+    Add("office.people_walking", Int(&o.people_walking, 0, 6, "office.people_walking"));
+    Add("office.people_sitting", Int(&o.people_sitting, 0, 4, "office.people_sitting"));
+    Add("office.walking_speed_mps",
+        Double(&o.walking_speed_mps, Closed(0, 2.5), "office.walking_speed_mps"));
+  }
+
+  const Field* Find(const std::string& key) const {
+    auto it = fields_.find(key);
+    return it == fields_.end() ? nullptr : &it->second;
+  }
+  const std::vector<std::string>& Order() const { return order_; }
+
+ private:
+  void Add(const std::string& key, Field f) {
+    fields_.emplace(key, std::move(f));
+    order_.push_back(key);
+  }
+
+  Field Double(double* v, Range r, std::string key) const {
+    std::string origin = origin_;
+    return {[=](const YAML::Node& n) {
+              const double x = ReadNumber(n, origin, key);
+              if (!r.Contains(x)) {
+                throw KeyError(origin, key, "must be " + Describe(r) + " (got " + n.Scalar() + ")");
+              }
+              *v = x;
+            },
+            [=] { return YAML::Node(*v); }};
+  }
+
+  Field Int(int* v, int lo, int hi, std::string key) const {
+    std::string origin = origin_;
+    return {[=](const YAML::Node& n) {
+              if (!n.IsScalar()) {
+                throw KeyError(origin, key, "expected an integer (got " + ScalarText(n) + ")");
+              }
+              long long x = 0;
+              try {
+                x = n.as<long long>();
+              } catch (const YAML::Exception&) {
+                throw KeyError(origin, key, "expected an integer (got '" + n.Scalar() + "')");
+              }
+              if (x < lo || x > hi) {
+                const std::string range =
+                    hi == std::numeric_limits<int>::max()
+                        ? ">= " + std::to_string(lo)
+                        : "in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
+                throw KeyError(origin, key, "must be " + range + " (got " + n.Scalar() + ")");
+              }
+              *v = static_cast<int>(x);
+            },
+            [=] { return YAML::Node(*v); }};
+  }
+
+  Field Seed(std::uint64_t* v, std::string key) const {
+    std::string origin = origin_;
+    return {[=](const YAML::Node& n) {
+              if (!n.IsScalar()) {
+                throw KeyError(origin, key, "expected an integer (got " + ScalarText(n) + ")");
+              }
+              if (!n.Scalar().empty() && n.Scalar()[0] == '-') {
+                throw KeyError(origin, key, "must be >= 0 (got " + n.Scalar() + ")");
+              }
+              try {
+                *v = n.as<std::uint64_t>();
+              } catch (const YAML::Exception&) {
+                throw KeyError(origin, key, "expected an integer (got '" + n.Scalar() + "')");
+              }
+            },
+            [=] { return YAML::Node(*v); }};
+  }
+
+  Field Bool(bool* v, std::string key) const {
+    std::string origin = origin_;
+    return {[=](const YAML::Node& n) {
+              try {
+                if (!n.IsScalar()) throw YAML::Exception(YAML::Mark(), "");
+                *v = n.as<bool>();
+              } catch (const YAML::Exception&) {
+                throw KeyError(origin, key, "expected true or false (got " + ScalarText(n) + ")");
+              }
+            },
+            [=] { return YAML::Node(*v); }};
+  }
+
+  Field String(std::string* v) const {
+    std::string origin = origin_;
+    return {[=](const YAML::Node& n) {
+              if (!n.IsScalar()) throw KeyError(origin, "name", "expected a string");
+              *v = n.Scalar();
+            },
+            [=] { return YAML::Node(*v); }};
+  }
+
+  Field Choice(std::string* v, std::vector<std::string> choices, std::string key) const {
+    std::string origin = origin_;
+    return {[=](const YAML::Node& n) {
+              const std::string x = n.IsScalar() ? n.Scalar() : ScalarText(n);
+              for (const std::string& c : choices) {
+                if (x == c) {
+                  *v = x;
+                  return;
+                }
+              }
+              std::string list;
+              for (const std::string& c : choices) list += (list.empty() ? "" : ", ") + c;
+              throw KeyError(origin, key, "must be one of " + list + " (got '" + x + "')");
+            },
+            [=] { return YAML::Node(*v); }};
+  }
+
+  // Reads a list of 3 numbers, each in `r`, into out[0..2].
+  static void ReadTriple(const YAML::Node& n, const std::string& origin,
+                         const std::string& key, Range r, double* out) {
+    if (!n.IsSequence() || n.size() != 3) {
+      throw KeyError(origin, key, "expected a list of 3 numbers");
+    }
+    for (int i = 0; i < 3; ++i) {
+      const double x = ReadNumber(n[i], origin, key);
+      if (!r.Contains(x)) {
+        throw KeyError(origin, key, "each value must be " + Describe(r) + " (got " + n[i].Scalar() + ")");
+      }
+      out[i] = x;
+    }
+  }
+
+  Field Vec3(Eigen::Vector3d* v, Range r, std::string key) const {
+    std::string origin = origin_;
+    return {[=](const YAML::Node& n) {
+              double t[3];
+              ReadTriple(n, origin, key, r, t);
+              *v = Eigen::Vector3d(t[0], t[1], t[2]);
+            },
+            [=] {
+              YAML::Node out(YAML::NodeType::Sequence);
+              for (int i = 0; i < 3; ++i) out.push_back((*v)[i]);
+              out.SetStyle(YAML::EmitterStyle::Flow);
+              return out;
+            }};
+  }
+
+  Field RoomSize(double* v, std::string key) const {
+    std::string origin = origin_;
+    return {[=](const YAML::Node& n) {
+              double t[3];
+              ReadTriple(n, origin, key, Closed(2.2, 30), t);
+              if (t[0] < 4 || t[1] < 4) {
+                throw KeyError(origin, key, "floor must be at least 4 x 4 m");
+              }
+              for (int i = 0; i < 3; ++i) v[i] = t[i];
+            },
+            [=] {
+              YAML::Node out(YAML::NodeType::Sequence);
+              for (int i = 0; i < 3; ++i) out.push_back(v[i]);
+              out.SetStyle(YAML::EmitterStyle::Flow);
+              return out;
+            }};
+  }
+
+  std::string origin_;
+  std::map<std::string, Field> fields_;
+  std::vector<std::string> order_;
+};
+
+const std::vector<std::string> kSections = {"camera", "sensor", "pass2", "city", "office"};
+
+bool IsSection(const std::string& key) {
+  for (const std::string& s : kSections) {
+    if (s == key) return true;
+  }
+  return false;
+}
+
+// Camera defaults that depend on the kind: an AirSim-like car camera (90 deg
+// horizontal FOV at 4:3, 15 fps) or a TUM-like Kinect (fy = 525 px at 480 rows, 30 fps).
+void ApplyKindDefaults(const std::string& kind, CameraSpec* c) {
+  const double kRadToDeg = 180.0 / M_PI;
+  if (kind == "office") {
+    c->fovy_deg = 2.0 * std::atan(240.0 / 525.0) * kRadToDeg;  // ~49.1 deg
+    c->fps = 30.0;
+    c->depth_factor = 5000.0;
+    c->near_m = 0.05;
+    c->far_m = 20.0;
+  } else {
+    c->fovy_deg = 2.0 * std::atan(0.75) * kRadToDeg;  // ~73.7 deg
+    c->fps = 15.0;
+    c->depth_factor = 1000.0;
+    c->near_m = 0.1;
+    c->far_m = 200.0;
+  }
+}
+
+std::string KeyText(const YAML::Node& key) { return key.IsScalar() ? key.Scalar() : "?"; }
+
+}  // namespace
+
+Scenario ParseScenario(const std::string& yaml_text, const std::string& origin) {
+  Scenario s;
+  s.source_file = origin;
+  s.text = yaml_text;
+
+  // Parse the YAML itself; syntax errors carry a line number.
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml_text);
+  } catch (const YAML::ParserException& e) {
+    throw Error(origin + ": line " + std::to_string(e.mark.line + 1) + ": " + e.msg);
+  }
+  if (!root.IsMap()) {
+    throw Error(origin + ": expected a mapping of keys at the top level");
+  }
+
+  FieldTable table(&s, origin);
+
+  // The kind first: it chooses the camera defaults that the file may then override.
+  if (root["kind"]) table.Find("kind")->read(root["kind"]);
+  ApplyKindDefaults(s.kind, &s.camera);
+
+  // Every key in document order, refusing unknown ones.
+  for (const auto& top : root) {
+    const std::string key = KeyText(top.first);
+    if (key == "expect") {
+      s.expect = YAML::Clone(top.second);
+    } else if (IsSection(key)) {
+      if (top.second.IsNull()) continue;
+      if (!top.second.IsMap()) throw KeyError(origin, key, "expected a mapping");
+      for (const auto& sub : top.second) {
+        const std::string dotted = key + "." + KeyText(sub.first);
+        const Field* f = table.Find(dotted);
+        if (f == nullptr) throw Error(origin + ": unknown key '" + dotted + "'");
+        f->read(sub.second);
+      }
+    } else {
+      const Field* f = table.Find(key);
+      if (f == nullptr) throw Error(origin + ": unknown key '" + key + "'");
+      f->read(top.second);
+    }
+  }
+
+  // Checks across keys.
+  if (s.camera.far_m <= s.camera.near_m) {
+    throw KeyError(origin, "camera.far_m", "must be > camera.near_m (got " + Num(s.camera.far_m) + ")");
+  }
+  if (s.pass2.relocated_share + s.pass2.removed_share > 1.0 + 1e-9) {
+    throw KeyError(origin, "pass2.removed_share",
+                   "relocated_share + removed_share must be <= 1 (got " +
+                       Num(s.pass2.relocated_share + s.pass2.removed_share) + ")");
+  }
+  if (s.kind == "city" && s.city.road_width_m + 2 * s.city.sidewalk_width_m + 8 > s.city.block_size_m) {
+    throw KeyError(origin, "city.block_size_m",
+                   "must leave at least 8 m for buildings after roads and sidewalks (got " +
+                       Num(s.city.block_size_m) + ")");
+  }
+  if (s.name.empty()) s.name = std::filesystem::path(origin).stem().string();
+  return s;
+}
+
+Scenario LoadScenario(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw FileError(file, "cannot open scenario file");
+  std::ostringstream bytes;
+  bytes << in.rdbuf();
+  if (in.bad()) throw FileError(file, "cannot read scenario file");
+  return ParseScenario(bytes.str(), file.string());
+}
+
+YAML::Node ScenarioToYaml(const Scenario& scenario) {
+  Scenario copy = scenario;
+  FieldTable table(&copy, scenario.source_file.string());
+  YAML::Node root(YAML::NodeType::Map);
+  for (const std::string& key : table.Order()) {
+    const std::size_t dot = key.find('.');
+    if (dot == std::string::npos) {
+      root[key] = table.Find(key)->write();
+    } else {
+      root[key.substr(0, dot)][key.substr(dot + 1)] = table.Find(key)->write();
+    }
+  }
+  if (scenario.expect && !scenario.expect.IsNull()) root["expect"] = YAML::Clone(scenario.expect);
+  return root;
+}
+
+void ApplyOverride(Scenario& scenario, const std::string& dotted_key, const std::string& value) {
+  const std::string origin =
+      scenario.source_file.empty() ? std::string("<override>") : scenario.source_file.string();
+
+  // The YAML to edit: the file's own text, or the effective configuration.
+  YAML::Node root;
+  if (!scenario.text.empty()) {
+    try {
+      root = YAML::Load(scenario.text);
+    } catch (const YAML::ParserException& e) {
+      throw Error(origin + ": line " + std::to_string(e.mark.line + 1) + ": " + e.msg);
+    }
+  }
+  if (!root.IsMap()) root = ScenarioToYaml(scenario);
+
+  // The value as YAML, so that lists and numbers keep their types.
+  YAML::Node parsed;
+  try {
+    parsed = YAML::Load(value);
+  } catch (const YAML::ParserException& e) {
+    throw KeyError(origin, dotted_key, "cannot read override value '" + value + "': " + e.msg);
+  }
+
+  // Walk (creating mappings) down to the parent of the last key, then set it.
+  std::vector<std::string> parts;
+  std::stringstream ss(dotted_key);
+  for (std::string part; std::getline(ss, part, '.');) parts.push_back(part);
+  if (parts.empty() || dotted_key.empty()) throw Error(origin + ": empty override key");
+  YAML::Node node = root;
+  for (std::size_t i = 0; i + 1 < parts.size(); ++i) {
+    YAML::Node child = node[parts[i]];
+    if (!child.IsDefined() || child.IsNull()) {
+      node[parts[i]] = YAML::Node(YAML::NodeType::Map);
+      child.reset(node[parts[i]]);
+    }
+    if (!child.IsMap()) throw KeyError(origin, parts[i], "expected a mapping");
+    node.reset(child);
+  }
+  node[parts.back()] = parsed;
+
+  YAML::Emitter out;
+  out << root;
+  Scenario edited = ParseScenario(std::string(out.c_str()) + "\n", origin);
+  edited.source_file = scenario.source_file;
+  scenario = std::move(edited);
+}
+
+}  // namespace segslam::scenes

@@ -1,0 +1,156 @@
+#include "scenes/scenario.h"
+#include "scenes/world.h"
+
+#include "test_util.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <set>
+
+namespace segslam::scenes {
+namespace {
+
+using testing::ScenarioPath;
+
+// The small test city, built once.
+const World& SmallCity() {
+  static const World world = BuildWorld(LoadScenario(ScenarioPath("test/city_small.yaml")));
+  return world;
+}
+const Scenario& SmallCityScenario() {
+  static const Scenario s = LoadScenario(ScenarioPath("test/city_small.yaml"));
+  return s;
+}
+
+double RouteLength(const World& w, Pass pass) {
+  double length = 0;
+  const double step = 1.0 / w.camera.fps;
+  const double duration = (w.frames_per_pass[PassIndex(pass)] - 1) * step;
+  for (double t = 0; t + step <= duration + 1e-9; t += step) {
+    length += (CameraPoseAt(w, pass, t + step).translation() - CameraPoseAt(w, pass, t).translation()).norm();
+  }
+  return length;
+}
+
+TEST(CityTest, BuildIsDeterministicAndSeeded) {
+  Scenario s = SmallCityScenario();
+  const World a = BuildWorld(s);
+  EXPECT_EQ(testing::HashWorld(a), testing::HashWorld(SmallCity()));
+  s.seed += 1;
+  EXPECT_NE(testing::HashWorld(BuildWorld(s)), testing::HashWorld(a));
+}
+
+TEST(CityTest, RouteHasTheRequestedLengthHeightAndRate) {
+  const World& w = SmallCity();
+  const Scenario& s = SmallCityScenario();
+  EXPECT_EQ(w.frames_per_pass[0], w.frames_per_pass[1]);
+  EXPECT_NEAR(w.frames_per_pass[0], s.city.route_length_m / s.city.camera_speed_mps * s.camera.fps, 1.5);
+  EXPECT_NEAR(RouteLength(w, Pass::kFirst), s.city.route_length_m, 0.02 * s.city.route_length_m);
+  for (int f = 0; f < w.frames_per_pass[0]; f += 5) {
+    const Eigen::Isometry3d T = CameraPoseAt(w, Pass::kFirst, FrameStamp(w, f));
+    EXPECT_NEAR(T.translation().z(), 1.5, 0.03);
+    // Optical axis forward and horizontal; image y points down.
+    EXPECT_LT(std::abs(T.linear().col(2).z()), 0.02);
+    EXPECT_GT(T.linear().col(1).z(), -1.0);
+    EXPECT_LT(T.linear().col(1).z(), -0.99);
+  }
+}
+
+TEST(CityTest, DefaultRouteLengthWithinTwoPercent) {
+  const Scenario s = LoadScenario(ScenarioPath("city_two_pass.yaml"));
+  const auto start = std::chrono::steady_clock::now();
+  const World w = BuildWorld(s);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_LT(seconds, 3.0);
+  EXPECT_NEAR(RouteLength(w, Pass::kFirst), 200.0, 4.0);
+  EXPECT_NEAR(RouteLength(w, Pass::kSecond), 200.0, 6.0);
+  // Texture memory stays reasonable.
+  std::size_t bytes = 0;
+  for (const Texture& t : w.textures) bytes += t.image_bgr.total() * t.image_bgr.elemSize();
+  EXPECT_LT(bytes, 60u << 20);
+  // Counts of the scenario.
+  int parked1 = 0, moving_cars = 0, pedestrians = 0;
+  for (const Object& o : w.objects) {
+    const bool vehicle = o.category_name == "car" || o.category_name == "truck" || o.category_name == "bus";
+    if (vehicle && o.placement[0].present && !o.placement[0].moving) ++parked1;
+    if (vehicle && o.placement[0].moving) ++moving_cars;
+    if (o.category_name == "person") ++pedestrians;
+  }
+  EXPECT_EQ(parked1, 20);
+  EXPECT_EQ(moving_cars, 6);
+  EXPECT_EQ(pedestrians, 10);
+}
+
+TEST(CityTest, SecondPassOffsetsTheRoute) {
+  const World& w = SmallCity();
+  for (int f = 0; f < w.frames_per_pass[0]; f += 7) {
+    const double t = FrameStamp(w, f);
+    const Eigen::Isometry3d T1 = CameraPoseAt(w, Pass::kFirst, t), T2 = CameraPoseAt(w, Pass::kSecond, t);
+    const Eigen::Vector3d left = Eigen::Vector3d::UnitZ().cross(T1.linear().col(2)).normalized();
+    EXPECT_NEAR((T2.translation() - T1.translation()).dot(left), 0.5, 0.02);
+  }
+}
+
+TEST(CityTest, SecondPassChangesMatchShares) {
+  const World& w = SmallCity();
+  const Scenario& s = SmallCityScenario();
+  const SecondPassChanges& c = w.pass2_changes;
+  EXPECT_EQ(c.candidates, s.city.parked_cars);
+  EXPECT_EQ(static_cast<long>(c.relocated.size()), std::lround(s.pass2.relocated_share * c.candidates));
+  EXPECT_EQ(static_cast<long>(c.removed.size()), std::lround(s.pass2.removed_share * c.candidates));
+  EXPECT_EQ(static_cast<int>(c.added.size()), s.pass2.added);
+  for (std::uint16_t id : c.added) {
+    const Object& o = w.objects[id - 1];
+    EXPECT_EQ(o.category_name == "car" || o.category_name == "truck", true);
+  }
+}
+
+TEST(CityTest, ObjectsHaveCocoIdsAndUniqueInstanceIds) {
+  const World& w = SmallCity();
+  std::set<int> ids;
+  const std::set<int> coco = {1, 3, 6, 8, 10, 11, 13, 15};
+  int moving = 0, walkers = 0;
+  for (const Object& o : w.objects) {
+    EXPECT_GE(o.instance_id, 1);
+    EXPECT_TRUE(ids.insert(o.instance_id).second);
+    EXPECT_TRUE(coco.count(o.coco_category_id)) << o.category_name;
+    EXPECT_FALSE(o.parts.empty());
+    EXPECT_EQ(o.moveable, o.coco_category_id <= 8) << o.category_name;
+    moving += o.placement[0].moving;
+    walkers += o.articulation == Articulation::kWalker;
+  }
+  EXPECT_EQ(moving, SmallCityScenario().city.moving_cars + SmallCityScenario().city.pedestrians);
+  EXPECT_EQ(walkers, SmallCityScenario().city.pedestrians);
+  for (const Geom& g : w.static_geoms) {
+    EXPECT_GE(g.material, 0);
+    EXPECT_LT(g.material, static_cast<int>(w.materials.size()));
+  }
+  for (const Material& m : w.materials) EXPECT_LT(m.texture, static_cast<int>(w.textures.size()));
+  EXPECT_FALSE(w.lights.empty());
+  EXPECT_TRUE(w.lights[0].directional);
+}
+
+TEST(CityTest, NothingMovesInTheStaticCity) {
+  const World w = BuildWorld(LoadScenario(ScenarioPath("test/city_static_small.yaml")));
+  for (const Object& o : w.objects) {
+    for (Pass pass : kBothPasses) EXPECT_FALSE(ObjectMovesAt(o, pass, 1.0, 0.1)) << o.category_name;
+  }
+}
+
+TEST(CityTest, CameraIsNeverInsideAGeom) {
+  for (const std::string file : {"test/city_small.yaml", "city_two_pass.yaml"}) {
+    const World w = BuildWorld(LoadScenario(ScenarioPath(file)));
+    for (Pass pass : kBothPasses) {
+      for (int f = 0; f < w.frames_per_pass[PassIndex(pass)]; f += 3) {
+        const double t = FrameStamp(w, f);
+        std::string what;
+        EXPECT_FALSE(testing::InsideAnyGeom(w, pass, t, CameraPoseAt(w, pass, t).translation(), 0.2, &what))
+            << file << " " << PassName(pass) << " frame " << f << " inside " << what;
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace segslam::scenes

@@ -1,0 +1,136 @@
+#include "scenes/scenario.h"
+#include "scenes/world.h"
+
+#include "test_util.h"
+
+#include <gtest/gtest.h>
+
+#include <set>
+
+namespace segslam::scenes {
+namespace {
+
+using testing::ScenarioPath;
+
+Scenario SmallOffice(const std::string& motion) {
+  Scenario s = LoadScenario(ScenarioPath("test/office_small.yaml"));
+  ApplyOverride(s, "office.camera_motion", motion);
+  return s;
+}
+
+const Object* MainDesk(const World& w) {
+  for (const Object& o : w.objects) {
+    if (o.category_name == "dining table") return &o;
+  }
+  return nullptr;
+}
+
+TEST(OfficeTest, DeterministicAndSeeded) {
+  Scenario s = SmallOffice("xyz");
+  EXPECT_EQ(testing::HashWorld(BuildWorld(s)), testing::HashWorld(BuildWorld(s)));
+  const std::uint64_t a = testing::HashWorld(BuildWorld(s));
+  s.seed += 1;
+  EXPECT_NE(testing::HashWorld(BuildWorld(s)), a);
+}
+
+class OfficeMotionTest : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(OfficeMotionTest, CameraStaysInTheRoomLookingAtTheDesk) {
+  const Scenario s = SmallOffice(GetParam());
+  const World w = BuildWorld(s);
+  ASSERT_EQ(w.frames_per_pass[0], s.office.frames);
+  const Object* desk = MainDesk(w);
+  ASSERT_NE(desk, nullptr);
+  const Eigen::Vector3d target = desk->placement[0].T_world_object.translation() + Eigen::Vector3d(0, 0, 0.8);
+  const double* room = s.office.room_size_m;
+  double travelled = 0, turned = 0;
+  for (Pass pass : kBothPasses) {
+    for (int f = 0; f < w.frames_per_pass[0]; ++f) {
+      const Eigen::Isometry3d T = CameraPoseAt(w, pass, FrameStamp(w, f));
+      const Eigen::Vector3d p = T.translation();
+      EXPECT_LT(std::abs(p.x()), room[0] / 2 - 0.2);
+      EXPECT_LT(std::abs(p.y()), room[1] / 2 - 0.2);
+      EXPECT_GT(p.z(), 0.8);
+      EXPECT_LT(p.z(), room[2] - 0.2);
+      const double distance = (target - p).norm();
+      EXPECT_GT(distance, 1.0);
+      EXPECT_LT(distance, 2.8);
+      const double angle = std::acos(T.linear().col(2).dot((target - p).normalized()));
+      EXPECT_LT(angle, 40 * M_PI / 180) << GetParam() << " frame " << f;
+      std::string what;
+      EXPECT_FALSE(testing::InsideAnyGeom(w, pass, FrameStamp(w, f), p, 0.1, &what)) << "inside " << what;
+      if (f > 0 && pass == Pass::kFirst) {
+        const Eigen::Isometry3d P = CameraPoseAt(w, pass, FrameStamp(w, f - 1));
+        travelled += (p - P.translation()).norm();
+        turned += Eigen::AngleAxisd(P.linear().transpose() * T.linear()).angle();
+      }
+    }
+  }
+  // Each motion does what its name says (over 40 frames, 1.3 s).
+  if (GetParam() == "static") {
+    EXPECT_LT(travelled, 0.05);
+  } else if (GetParam() == "rpy") {
+    EXPECT_GT(turned, 5 * travelled);
+  } else {
+    EXPECT_GT(travelled, 0.05);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Motions, OfficeMotionTest, ::testing::Values("xyz", "static", "rpy", "halfsphere"));
+
+TEST(OfficeTest, PeopleAndSecondPassChanges) {
+  const Scenario s = SmallOffice("xyz");
+  const World w = BuildWorld(s);
+  int walkers = 0, sitters = 0;
+  std::set<int> ids;
+  for (const Object& o : w.objects) {
+    EXPECT_TRUE(ids.insert(o.instance_id).second);
+    EXPECT_GE(o.instance_id, 1);
+    EXPECT_GT(o.coco_category_id, 0);
+    walkers += o.articulation == Articulation::kWalker;
+    sitters += o.articulation == Articulation::kSitter;
+    if (o.articulation == Articulation::kWalker) {
+      EXPECT_TRUE(ObjectMovesAt(o, Pass::kFirst, 0.5, 1.0 / 30));
+      EXPECT_EQ(o.parts.size(), 10u);
+    }
+    if (o.articulation == Articulation::kSitter) {
+      EXPECT_TRUE(ObjectMovesAt(o, Pass::kFirst, 0.5, 0.2));
+    }
+  }
+  EXPECT_EQ(walkers, s.office.people_walking);
+  EXPECT_EQ(sitters, s.office.people_sitting);
+  const SecondPassChanges& c = w.pass2_changes;
+  EXPECT_GT(c.candidates, 0);
+  EXPECT_EQ(static_cast<long>(c.relocated.size()), std::lround(s.pass2.relocated_share * c.candidates));
+  EXPECT_EQ(static_cast<long>(c.removed.size()), std::lround(s.pass2.removed_share * c.candidates));
+  EXPECT_EQ(static_cast<int>(c.added.size()), s.pass2.added);
+  for (std::uint16_t id : c.relocated) EXPECT_TRUE(w.objects[id - 1].moveable);
+  // Moveable rigid objects in pass 1 = budget of the scenario.
+  int moveable = 0;
+  for (const Object& o : w.objects) {
+    moveable += o.moveable && o.articulation == Articulation::kRigid && o.placement[0].present;
+  }
+  EXPECT_EQ(moveable, s.office.moveable_objects);
+  EXPECT_GE(w.lights.size(), 2u);
+  EXPECT_FALSE(w.lights[0].directional);
+}
+
+TEST(OfficeTest, WalkingScenariosKeepPeopleInView) {
+  // In the walking scenario, people are in front of the camera a good part of the time.
+  const World w = BuildWorld(LoadScenario(ScenarioPath("office_walking_xyz.yaml")));
+  int in_view = 0, samples = 0;
+  for (int f = 0; f < w.frames_per_pass[0]; f += 10) {
+    const double t = FrameStamp(w, f);
+    const Eigen::Isometry3d T_cw = CameraPoseAt(w, Pass::kFirst, t).inverse();
+    for (const Object& o : w.objects) {
+      if (o.articulation != Articulation::kWalker) continue;
+      const Eigen::Vector3d p = T_cw * (ObjectPoseAt(o, Pass::kFirst, t).translation() + Eigen::Vector3d(0, 0, 1.0));
+      ++samples;
+      in_view += p.z() > 0.3 && std::abs(p.x() / p.z()) < 0.6 && std::abs(p.y() / p.z()) < 0.45;
+    }
+  }
+  EXPECT_GT(in_view, samples / 4);
+}
+
+}  // namespace
+}  // namespace segslam::scenes

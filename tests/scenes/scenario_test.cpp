@@ -1,0 +1,165 @@
+#include "scenes/scenario.h"
+
+#include "core/error.h"
+#include "test_util.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+namespace segslam::scenes {
+namespace {
+
+using testing::ScenarioPath;
+
+// The error message of parsing `text`, or "" if it parsed.
+std::string ParseError(const std::string& text) {
+  try {
+    ParseScenario(text, "my.yaml");
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(ScenarioTest, LoadsEveryScenarioFile) {
+  int count = 0;
+  for (const std::string dir : {"", "test"}) {
+    for (const auto& entry : std::filesystem::directory_iterator(ScenarioPath(dir))) {
+      if (entry.path().extension() != ".yaml") continue;
+      SCOPED_TRACE(entry.path().string());
+      const Scenario s = LoadScenario(entry.path());
+      EXPECT_FALSE(s.name.empty());
+      EXPECT_EQ(s.text.rfind("#", 0), 0u) << "scenario files start with a comment";
+      ++count;
+    }
+  }
+  EXPECT_GE(count, 10);
+}
+
+TEST(ScenarioTest, DefaultCityFileHasTheDocumentedValues) {
+  const Scenario s = LoadScenario(ScenarioPath("city_two_pass.yaml"));
+  EXPECT_EQ(s.kind, "city");
+  EXPECT_DOUBLE_EQ(s.city.route_length_m, 200);
+  EXPECT_EQ(s.city.parked_cars, 20);
+  EXPECT_EQ(s.city.moving_cars, 6);
+  EXPECT_EQ(s.city.pedestrians, 10);
+  EXPECT_DOUBLE_EQ(s.pass2.camera_offset_m.y(), 0.5);
+  EXPECT_DOUBLE_EQ(s.camera.depth_factor, 1000);
+  EXPECT_NEAR(s.camera.fovy_deg, 73.74, 0.01);
+}
+
+TEST(ScenarioTest, TextIsTheFileBytes) {
+  const std::string path = ScenarioPath("test/office_small.yaml");
+  std::ifstream in(path, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(LoadScenario(path).text, bytes);
+}
+
+TEST(ScenarioTest, KindChoosesCameraDefaults) {
+  const Scenario office = ParseScenario("kind: office\n", "o.yaml");
+  EXPECT_DOUBLE_EQ(office.camera.depth_factor, 5000);
+  EXPECT_DOUBLE_EQ(office.camera.far_m, 20);
+  EXPECT_NEAR(office.camera.fovy_deg, 49.13, 0.01);
+  EXPECT_DOUBLE_EQ(office.camera.fps, 30);
+  const Scenario city = ParseScenario("kind: city\ncamera: {far_m: 300}\n", "c.yaml");
+  EXPECT_DOUBLE_EQ(city.camera.far_m, 300);
+  EXPECT_DOUBLE_EQ(city.camera.depth_factor, 1000);
+  EXPECT_EQ(city.name, "c");
+}
+
+TEST(ScenarioTest, UnknownKeyNamesKeyAndFile) {
+  EXPECT_EQ(ParseError("city:\n  movng_cars: 3\n"), "my.yaml: unknown key 'city.movng_cars'");
+  EXPECT_EQ(ParseError("colour: red\n"), "my.yaml: unknown key 'colour'");
+}
+
+TEST(ScenarioTest, OutOfRangeNamesKeyAndValue) {
+  EXPECT_EQ(ParseError("city:\n  moving_cars: -3\n"), "my.yaml: city.moving_cars: must be in [0, 100] (got -3)");
+  EXPECT_EQ(ParseError("camera:\n  fps: 0\n"), "my.yaml: camera.fps: must be in (0, 240] (got 0)");
+  EXPECT_EQ(ParseError("camera: {width: 8}\n"), "my.yaml: camera.width: must be in [16, 4096] (got 8)");
+  EXPECT_EQ(ParseError("pass2: {relocated_share: 1.5}\n"),
+            "my.yaml: pass2.relocated_share: must be in [0, 1] (got 1.5)");
+  EXPECT_EQ(ParseError("city: {route_length_m: 5}\n"), "my.yaml: city.route_length_m: must be in [20, 2000] (got 5)");
+  EXPECT_EQ(ParseError("kind: forest\n"), "my.yaml: kind: must be one of city, office (got 'forest')");
+  EXPECT_EQ(ParseError("office: {camera_motion: spin}\n"),
+            "my.yaml: office.camera_motion: must be one of xyz, static, rpy, halfsphere (got 'spin')");
+  EXPECT_NE(ParseError("seed: -1\n").find("seed: must be >= 0"), std::string::npos);
+  EXPECT_NE(ParseError("camera: {near_m: 1, far_m: 0.5}\n").find("camera.far_m"), std::string::npos);
+}
+
+TEST(ScenarioTest, WrongTypesAreRefused) {
+  EXPECT_EQ(ParseError("camera:\n  fps: fast\n"), "my.yaml: camera.fps: expected a number (got 'fast')");
+  EXPECT_EQ(ParseError("city: {parked_cars: 2.5}\n"), "my.yaml: city.parked_cars: expected an integer (got '2.5')");
+  EXPECT_EQ(ParseError("sensor: {enabled: maybe}\n"), "my.yaml: sensor.enabled: expected true or false (got maybe)");
+  EXPECT_EQ(ParseError("pass2: {camera_offset_m: [1, 2]}\n"),
+            "my.yaml: pass2.camera_offset_m: expected a list of 3 numbers");
+  EXPECT_EQ(ParseError("city: 3\n"), "my.yaml: city: expected a mapping");
+  EXPECT_EQ(ParseError("camera: {fps: [1]}\n"), "my.yaml: camera.fps: expected a number (got a list)");
+}
+
+TEST(ScenarioTest, MalformedYamlNamesLine) {
+  const std::string error = ParseError("kind: city\ncity:\n  parked_cars: [1, 2\n  moving_cars: 3\n");
+  EXPECT_EQ(error.rfind("my.yaml: line ", 0), 0u) << error;
+  EXPECT_NE(ParseError("- a\n- b\n").find("expected a mapping"), std::string::npos);
+}
+
+TEST(ScenarioTest, MissingFileNamesFile) {
+  try {
+    LoadScenario("/nonexistent/x.yaml");
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/x.yaml"), std::string::npos);
+  }
+}
+
+TEST(ScenarioTest, ExpectIsKeptVerbatim) {
+  const Scenario s = ParseScenario("expect:\n  ate_m: {max: 0.1}\n  anything: [1, 2]\n", "e.yaml");
+  ASSERT_TRUE(s.expect.IsMap());
+  EXPECT_DOUBLE_EQ(s.expect["ate_m"]["max"].as<double>(), 0.1);
+}
+
+TEST(ScenarioTest, ApplyOverrideSetsValuesWithTheSameChecks) {
+  Scenario s = LoadScenario(ScenarioPath("city_two_pass.yaml"));
+  ApplyOverride(s, "city.moving_cars", "8");
+  EXPECT_EQ(s.city.moving_cars, 8);
+  EXPECT_EQ(s.city.parked_cars, 20);  // the rest is kept
+  ApplyOverride(s, "pass2.camera_offset_m", "[0, 1, 0.2]");
+  EXPECT_DOUBLE_EQ(s.pass2.camera_offset_m.z(), 0.2);
+  EXPECT_EQ(s.city.moving_cars, 8);  // earlier overrides survive
+  ApplyOverride(s, "seed", "99");
+  EXPECT_EQ(s.seed, 99u);
+  EXPECT_NE(s.source_file.string().find("city_two_pass.yaml"), std::string::npos);
+
+  try {
+    ApplyOverride(s, "city.movng_cars", "8");
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("unknown key 'city.movng_cars'"), std::string::npos);
+  }
+  EXPECT_THROW(ApplyOverride(s, "city.moving_cars", "-1"), Error);
+  EXPECT_EQ(s.city.moving_cars, 8);  // unchanged after a refused override
+
+  // A scenario built in code has no text: the effective configuration is edited.
+  Scenario code;
+  code.kind = "office";
+  code.office.frames = 77;
+  ApplyOverride(code, "office.people_walking", "3");
+  EXPECT_EQ(code.office.people_walking, 3);
+  EXPECT_EQ(code.office.frames, 77);
+}
+
+TEST(ScenarioTest, ToYamlRoundTrips) {
+  Scenario s = LoadScenario(ScenarioPath("office_walking_rpy.yaml"));
+  YAML::Emitter out;
+  out << ScenarioToYaml(s);
+  const Scenario back = ParseScenario(out.c_str(), "round.yaml");
+  EXPECT_EQ(back.office.camera_motion, "rpy");
+  EXPECT_EQ(back.office.frames, s.office.frames);
+  EXPECT_DOUBLE_EQ(back.camera.fovy_deg, s.camera.fovy_deg);
+  EXPECT_DOUBLE_EQ(back.office.room_size_m[2], s.office.room_size_m[2]);
+  EXPECT_EQ(back.seed, s.seed);
+}
+
+}  // namespace
+}  // namespace segslam::scenes
