@@ -317,9 +317,13 @@ bool IsSection(const std::string& key) {
   return false;
 }
 
-// Camera defaults that depend on the kind: an AirSim-like car camera (90 deg
+// Camera and sensor defaults that depend on the kind: an AirSim-like car camera (90 deg
 // horizontal FOV at 4:3, 15 fps) or a TUM-like Kinect (fy = 525 px at 480 rows, 30 fps).
-void ApplyKindDefaults(const std::string& kind, CameraSpec* c) {
+// The Kinect's noise model (sigma 1.5 mm at 1 m growing with depth squared, disparity
+// quantisation of a 7.5 cm baseline) would put metres of noise on a street at 30 m; a
+// car's depth sensor is a wide-baseline stereo or lidar-assisted unit, so the city keeps
+// the quadratic growth with a fifth of the noise and no Kinect quantisation.
+void ApplyKindDefaults(const std::string& kind, CameraSpec* c, SensorSpec* sensor) {
   const double kRadToDeg = 180.0 / M_PI;
   if (kind == "office") {
     c->fovy_deg = 2.0 * std::atan(240.0 / 525.0) * kRadToDeg;  // ~49.1 deg
@@ -333,6 +337,8 @@ void ApplyKindDefaults(const std::string& kind, CameraSpec* c) {
     c->depth_factor = 1000.0;
     c->near_m = 0.1;
     c->far_m = 200.0;
+    sensor->depth_noise_sigma_at_1m = 0.0003;
+    sensor->depth_quantization = 0.0;
   }
 }
 
@@ -360,7 +366,7 @@ Scenario ParseScenario(const std::string& yaml_text, const std::string& origin) 
 
   // The kind first: it chooses the camera defaults that the file may then override.
   if (root["kind"]) table.Find("kind")->read(root["kind"]);
-  ApplyKindDefaults(s.kind, &s.camera);
+  ApplyKindDefaults(s.kind, &s.camera, &s.sensor);
 
   // Every key in document order, refusing unknown ones.
   for (const auto& top : root) {

@@ -18,6 +18,7 @@ namespace segslam::scenes {
 struct SensorSpec {
   bool enabled = true;                 // false: perfect RGB and depth
   double depth_noise_sigma_at_1m = 0.0015;  // metres; sigma grows with depth squared
+                                       // (city default: 0.0003, see scenario.cpp)
   double depth_quantization = 1.0;     // 1 = quantize to the disparity steps of a
                                        // Kinect-like sensor, 0 = off
   double max_depth_m = 0.0;            // beyond this depth is missing; 0 = kind default

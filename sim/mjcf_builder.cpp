@@ -228,10 +228,13 @@ MjcfModel BuildMjcf(const scenes::World& world, const MjcfOptions& options) {
   for (const scenes::Light& l : world.lights) {
     lights << fmt::format(
         "    <light directional=\"{}\" pos=\"{}\" dir=\"{}\" diffuse=\"{}\" ambient=\"{}\" "
-        "specular=\"{}\" castshadow=\"{}\"/>\n",
+        "specular=\"{}\" castshadow=\"{}\"{}/>\n",
         l.directional ? "true" : "false", Vec3(l.position), Vec3(l.direction.normalized()),
         Rgb(l.diffuse), Rgb(l.ambient), Rgb(l.specular),
-        options.shadows ? "true" : "false");
+        options.shadows ? "true" : "false",
+        // MuJoCo's lights are 45-degree spotlights by default; a ceiling lamp lights the
+        // whole room, so positional lights become point lights (GL's cutoff 180).
+        l.directional ? "" : " cutoff=\"180\" exponent=\"0\"");
   }
 
   std::ostringstream xml;
