@@ -2,6 +2,7 @@
 
 #include "core/error.h"
 #include "harness/commands.h"
+#include "harness/interrupt.h"
 
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
@@ -32,7 +33,7 @@ int RunCli(int argc, char** argv) {
     return action ? action() : 0;
   } catch (const Error& e) {
     std::fprintf(stderr, "segslam: error: %s\n", e.what());
-    return 1;
+    return InterruptRequested() ? 130 : 1;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "segslam: internal error: %s\n", e.what());
     return 3;

@@ -14,6 +14,8 @@ extern "C" void OnInterrupt(int /*signal*/) {
 
 }  // namespace
 
+bool InterruptRequested() { return interrupt_requested.load(); }
+
 const std::atomic<bool>* InstallInterruptFlag() {
   std::signal(SIGINT, OnInterrupt);
   std::signal(SIGTERM, OnInterrupt);

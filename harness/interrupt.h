@@ -10,4 +10,7 @@ namespace segslam::harness {
 // Installs the handlers and returns the flag they set.
 const std::atomic<bool>* InstallInterruptFlag();
 
+// Whether a SIGINT/SIGTERM arrived (the CLI then exits with 130, as shells expect).
+bool InterruptRequested();
+
 }  // namespace segslam::harness

@@ -290,7 +290,7 @@ GenerateSummary GenerateDataset(const scenes::Scenario& scenario, const fs::path
 
   WorldRenderer renderer(world, options.backend, options.render);
   const PinholeCamera camera = renderer.intrinsics();
-  const SensorModel sensor(scenario.sensor, camera, KindDefaultMaxDepth(world));
+  const SensorModel sensor(scenario.sensor, camera, KindDefaultMaxDepth(world), world.camera.fps);
   const SequenceCamera sequence_camera{camera, world.camera.depth_factor};
   const int threads = options.encode_threads > 0
                           ? options.encode_threads
@@ -298,11 +298,6 @@ GenerateSummary GenerateDataset(const scenes::Scenario& scenario, const fs::path
 
   GenerateSummary summary;
   summary.gl_renderer = renderer.gl_renderer();
-  int total_frames = 0;
-  for (scenes::Pass pass : scenes::kBothPasses) {
-    total_frames += FramesOfPass(world, pass, options.max_frames_per_pass);
-  }
-
   for (scenes::Pass pass : scenes::kBothPasses) {
     const int pass_index = scenes::PassIndex(pass);
     const int frame_count = FramesOfPass(world, pass, options.max_frames_per_pass);
@@ -369,8 +364,6 @@ GenerateSummary GenerateDataset(const scenes::Scenario& scenario, const fs::path
                                {"frames", frame_count}});
     }
   }
-  (void)total_frames;
-
   if (options.write_files) {
     WriteFileAtomically(staging->path() / "scenario.yaml", scenario.text);
     WriteManifest(staging->path(), {{"scenario", scenario.name},

@@ -31,7 +31,7 @@ class SensorModel {
   // spec.max_depth_m is 0 (e.g. 10 m indoors, 40 m outdoors). `fps`: frame rate, for
   // the motion blur (share of the frame interval the shutter is open).
   SensorModel(const scenes::SensorSpec& spec, const PinholeCamera& camera,
-              double kind_default_max_depth_m, double fps = 15.0);
+              double kind_default_max_depth_m, double fps);
 
   // Applies the model in place. `T_wc_prev` and `T_wc` (camera-to-world, optical frame,
   // previous and current frame) are used only for motion blur. A disabled spec leaves

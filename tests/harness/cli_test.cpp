@@ -7,7 +7,9 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <csignal>
 #include <sys/wait.h>
+#include <unistd.h>
 
 namespace {
 
@@ -134,6 +136,44 @@ TEST_F(CliBadInputTest, UnavailableEglBackend) {
   // Point GLVND at no EGL vendor at all: EGL cannot start, and generate must say so.
   ExpectGenerateFails(kSmallOffice, {"EGL"}, "--gl egl",
                       "__EGL_VENDOR_LIBRARY_FILENAMES=/nonexistent/vendor.json");
+}
+
+}  // namespace
+
+namespace {
+
+// Ctrl-C in the middle of a generation: exit code 130, nothing at the output path, and
+// no hidden partial directory left beside it.
+TEST_F(CliBadInputTest, InterruptLeavesNothingBehind) {
+  const fs::path out = dir_ / "out";
+  const std::string scenario = SEGSLAM_SOURCE_DIR "/scenarios/city_two_pass.yaml";
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    ::freopen("/dev/null", "w", stderr);
+    ::execl(SEGSLAM_BINARY, SEGSLAM_BINARY, "generate", scenario.c_str(), "--out", out.c_str(),
+            "--quiet", static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  // Wait until frames are being written (the staging directory has a pass1/rgb folder).
+  auto staging_has_frames = [&] {
+    for (const auto& entry : fs::directory_iterator(dir_)) {
+      const fs::path rgb = entry.path() / "pass1" / "rgb";
+      if (fs::exists(rgb) && !fs::is_empty(rgb)) return true;
+    }
+    return false;
+  };
+  for (int waited_ms = 0; waited_ms < 60000 && !staging_has_frames(); waited_ms += 50) {
+    ::usleep(50 * 1000);
+  }
+  ASSERT_TRUE(staging_has_frames()) << "generation never started writing frames";
+  ::kill(pid, SIGINT);
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 130);
+  EXPECT_FALSE(fs::exists(out));
+  EXPECT_TRUE(fs::is_empty(dir_)) << "something was left in " << dir_;
 }
 
 }  // namespace

@@ -31,7 +31,7 @@ RenderedFrame Applied(const SensorModel& model, std::uint64_t seed, int pass, in
 }
 
 TEST(SensorModelTest, SameKeyGivesSameNoiseOtherFramesDiffer) {
-  const SensorModel model(scenes::SensorSpec{}, kCamera, 10.0);
+  const SensorModel model(scenes::SensorSpec{}, kCamera, 10.0, /*fps=*/15.0);
   const RenderedFrame a = Applied(model, 42, 0, 3);
   const RenderedFrame b = Applied(model, 42, 0, 3);
   EXPECT_TRUE(Identical(a.depth_m, b.depth_m));
@@ -47,7 +47,7 @@ TEST(SensorModelTest, DisabledSensorLeavesTheFrameBitIdentical) {
   scenes::SensorSpec spec;
   spec.enabled = false;
   spec.motion_blur = true;
-  const SensorModel model(spec, kCamera, 10.0);
+  const SensorModel model(spec, kCamera, 10.0, /*fps=*/15.0);
   const RenderedFrame clean = Ramp();
   const RenderedFrame out = Applied(model, 1, 0, 0);
   EXPECT_TRUE(Identical(clean.depth_m, out.depth_m));
@@ -59,7 +59,7 @@ TEST(SensorModelTest, DepthNoiseGrowsWithDepthSquared) {
   spec.depth_quantization = 0;
   spec.edge_dropout = 0;
   spec.depth_noise_sigma_at_1m = 0.01;
-  const SensorModel model(spec, kCamera, 10.0);
+  const SensorModel model(spec, kCamera, 10.0, /*fps=*/15.0);
   const RenderedFrame clean = Ramp();
   const RenderedFrame noisy = Applied(model, 7, 0, 0);
   auto sigma_of_band = [&](int band) {
@@ -81,7 +81,7 @@ TEST(SensorModelTest, QuantizesToDisparityStepsAndLimitsTheRange) {
   spec.edge_dropout = 0;
   spec.max_depth_m = 6.5;
   spec.min_depth_m = 1.5;
-  const SensorModel model(spec, kCamera, 10.0);
+  const SensorModel model(spec, kCamera, 10.0, /*fps=*/15.0);
   const RenderedFrame out = Applied(model, 7, 0, 0);
   const double fb = kCamera.fx * SensorModel::kBaselineM;
   int valid = 0;
@@ -108,7 +108,7 @@ TEST(SensorModelTest, DropsDepthOnEdgesOnly) {
   spec.depth_noise_sigma_at_1m = 0;
   spec.depth_quantization = 0;
   spec.edge_dropout = 1.0;
-  const SensorModel model(spec, kCamera, 10.0);
+  const SensorModel model(spec, kCamera, 10.0, /*fps=*/15.0);
   const RenderedFrame out = Applied(model, 7, 0, 0);
   // Band boundaries at columns 19|20 (1 m -> 2 m) are edges; band interiors are not.
   EXPECT_EQ(out.depth_m.at<float>(60, 19), 0.0f);
@@ -120,7 +120,7 @@ TEST(SensorModelTest, DropsDepthOnEdgesOnly) {
 TEST(SensorModelTest, RgbNoiseHasTheRequestedSigma) {
   scenes::SensorSpec spec;
   spec.rgb_noise_sigma = 4.0;
-  const SensorModel model(spec, kCamera, 10.0);
+  const SensorModel model(spec, kCamera, 10.0, /*fps=*/15.0);
   const RenderedFrame out = Applied(model, 9, 0, 0);
   cv::Mat diff;
   out.color_bgr.convertTo(diff, CV_32FC3);
