@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "core/atomic_file.h"
+#include "core/json_file.h"
 #include "core/coco.h"
 #include "core/error.h"
 
@@ -111,18 +112,7 @@ InstanceTable InstanceTable::FromJson(const nlohmann::json& json, const std::str
 }
 
 InstanceTable InstanceTable::Read(const std::filesystem::path& path) {
-  std::ifstream file(path);
-  if (!file) {
-    throw FileError(path, std::filesystem::exists(path) ? "cannot open file"
-                                                        : "file does not exist");
-  }
-  nlohmann::json json;
-  try {
-    json = nlohmann::json::parse(file);
-  } catch (const nlohmann::json::exception& e) {
-    throw FileError(path, std::string("malformed JSON: ") + e.what());
-  }
-  return FromJson(json, path.string());
+  return FromJson(ReadJsonFile(path), path.string());
 }
 
 void InstanceTable::Write(const std::filesystem::path& path) const {

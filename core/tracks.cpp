@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include "core/atomic_file.h"
+#include "core/json_file.h"
 #include "core/error.h"
 
 namespace segslam {
@@ -141,18 +142,7 @@ std::vector<ObjectTrack> TracksFromJson(const nlohmann::json& json, const std::s
 }
 
 std::vector<ObjectTrack> ReadTracks(const std::filesystem::path& path) {
-  std::ifstream file(path);
-  if (!file) {
-    throw FileError(path, std::filesystem::exists(path) ? "cannot open file"
-                                                        : "file does not exist");
-  }
-  nlohmann::json json;
-  try {
-    json = nlohmann::json::parse(file);
-  } catch (const nlohmann::json::exception& e) {
-    throw FileError(path, std::string("malformed JSON: ") + e.what());
-  }
-  return TracksFromJson(json, path.string());
+  return TracksFromJson(ReadJsonFile(path), path.string());
 }
 
 void WriteTracks(const std::filesystem::path& path, const std::vector<ObjectTrack>& tracks) {
