@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <set>
 
 namespace segslam::scenes {
@@ -66,6 +67,7 @@ class CityBuilder {
     MakeBlocks();
     MakeStreets();
     MakeCameraRoutes();
+    MakeSamples();
     MakeParkedCars();
     MakeMovingCars();
     MakePedestrians();
@@ -584,69 +586,322 @@ class CityBuilder {
     parked_candidates_ = static_cast<int>(ids.size());
   }
 
-  // A closed lane loop around the rectangle of blocks [i0, i1] x [j0, j1] (node
-  // indices), counter-clockwise or clockwise, at the right-hand lane.
-  std::vector<Node> LoopNodes(int i0, int j0, int i1, int j1, bool ccw) const {
-    std::vector<Node> n = {{i0, j0}, {i1, j0}, {i1, j1}, {i0, j1}};
-    if (!ccw) std::reverse(n.begin(), n.end());
+  // ---- Moving actors along the route -----------------------------------------------------
+  // Moving cars and pedestrians are scripted against the camera: each gets a path on the
+  // streets of the route and a start offset chosen so that it is in front of the camera
+  // for a while (ahead in its lane, oncoming, crossing, on the sidewalks, at crosswalks),
+  // then every candidate is checked at frame rate over both passes for clearance from
+  // the camera and from the actors placed before it.
+
+  // An arc-length parametrised 2-D polyline.
+  struct Poly2 {
+    std::vector<Vec2> p;
+    std::vector<double> c;
+    explicit Poly2(std::vector<Vec2> pts) : p(std::move(pts)), c(p.size(), 0.0) {
+      for (std::size_t i = 1; i < p.size(); ++i) c[i] = c[i - 1] + (p[i] - p[i - 1]).norm();
+    }
+    double Length() const { return c.back(); }
+    Vec2 At(double s) const {
+      s = std::clamp(s, 0.0, Length());
+      const auto it = std::upper_bound(c.begin(), c.end(), s);
+      const std::size_t i = std::clamp<std::size_t>(it - c.begin(), 1, p.size() - 1);
+      const double seg = c[i] - c[i - 1];
+      return p[i - 1] + (seg > 0 ? (s - c[i - 1]) / seg : 0.0) * (p[i] - p[i - 1]);
+    }
+    Vec2 Tangent(double s) const { return (At(s + 0.5) - At(s - 0.5)).normalized(); }
+    // Arc length of the point nearest to q.
+    double Closest(const Vec2& q) const {
+      double best = 1e18, best_s = 0;
+      for (std::size_t i = 1; i < p.size(); ++i) {
+        const Vec2 d = p[i] - p[i - 1];
+        const double len2 = d.squaredNorm();
+        const double u = len2 > 0 ? std::clamp((q - p[i - 1]).dot(d) / len2, 0.0, 1.0) : 0.0;
+        const double dist = (p[i - 1] + u * d - q).norm();
+        if (dist < best) best = dist, best_s = c[i - 1] + u * (c[i] - c[i - 1]);
+      }
+      return best_s;
+    }
+  };
+
+  // A lane through consecutive nodes at `offset` right of the direction of travel, corners
+  // rounded like the camera's lane, extended straight by ext_before and ext_after.
+  std::vector<Vec2> NodeLane(const std::vector<Node>& nodes, double offset, double ext_before, double ext_after) const {
+    const double radius = std::min(6.0, block_ / 5);
+    auto dir = [&](std::size_t k) { return Vec2((NodePos(nodes[k + 1]) - NodePos(nodes[k])).normalized()); };
+    std::vector<Vec2> pts;
+    const Vec2 d0 = dir(0);
+    pts.push_back(NodePos(nodes[0]) - d0 * ext_before + Right(d0) * offset);
+    for (std::size_t k = 1; k + 1 < nodes.size(); ++k) {
+      const Vec2 a = dir(k - 1), b = dir(k);
+      if ((a - b).norm() < 1e-9) continue;
+      const Vec2 corner = NodePos(nodes[k]) + Right(a) * offset + Right(b) * offset;
+      const Vec2 centre = corner - a * radius + b * radius;
+      for (int i = 0; i <= 12; ++i) {
+        const double th = 0.5 * M_PI * i / 12;
+        pts.push_back(centre + radius * (-b * std::cos(th) + a * std::sin(th)));
+      }
+    }
+    const Vec2 dl = dir(nodes.size() - 2);
+    pts.push_back(NodePos(nodes.back()) + dl * ext_after + Right(dl) * offset);
+    return pts;
+  }
+
+  // Nodes of the route with the one before the first: the camera's lane is a part of
+  // NodeLane(RouteNodes(), lane_, e, e) starting at arc length e + block_ / 2.
+  std::vector<Node> RouteNodes() const {
+    const Node before{2 * nodes_[0].first - nodes_[1].first, 2 * nodes_[0].second - nodes_[1].second};
+    std::vector<Node> n = {before};
+    n.insert(n.end(), nodes_.begin(), nodes_.end());
     return n;
   }
 
-  PathMotion LanePath(const std::vector<Node>& loop, double offset, double z) const {
-    PathMotion path;
-    const int n = static_cast<int>(loop.size());
-    for (int k = 0; k < n; ++k) {
-      const Vec2 a = (NodePos(loop[k]) - NodePos(loop[(k + n - 1) % n])).normalized();
-      const Vec2 b = (NodePos(loop[(k + 1) % n]) - NodePos(loop[k])).normalized();
-      path.waypoints.push_back(At(NodePos(loop[k]) + Right(a) * offset + Right(b) * offset, z));
+  // Whether a ground point is on a raised block (sidewalk) rather than on a street.
+  bool OnBlock(const Vec2& p) const {
+    if (p.x() < (imin_ - 1) * block_ || p.x() > (imax_ + 1) * block_ || p.y() < (jmin_ - 1) * block_ ||
+        p.y() > (jmax_ + 1) * block_) {
+      return false;
     }
-    path.closed = true;
+    const double u = p.x() - block_ * std::round(p.x() / block_), v = p.y() - block_ * std::round(p.y() / block_);
+    return std::abs(u) > road_ / 2 && std::abs(v) > road_ / 2;
+  }
+
+  // A walking path through `pts`, resampled every metre, on the sidewalk or the street.
+  PathMotion WalkPath(const std::vector<Vec2>& pts) const {
+    PathMotion path;
+    path.closed = false;
+    for (std::size_t i = 0; i + 1 < pts.size(); ++i) {
+      const double len = (pts[i + 1] - pts[i]).norm();
+      const int n = std::max(1, static_cast<int>(std::ceil(len)));
+      for (int k = 0; k < n; ++k) {
+        const Vec2 q = pts[i] + (pts[i + 1] - pts[i]) * (static_cast<double>(k) / n);
+        path.waypoints.push_back(At(q, OnBlock(q) ? kCurbHeightM : 0.0));
+      }
+    }
+    path.waypoints.push_back(At(pts.back(), OnBlock(pts.back()) ? kCurbHeightM : 0.0));
     return path;
   }
 
-  bool SharesRouteDirection(const std::vector<Node>& loop) const {
-    const int n = static_cast<int>(loop.size());
-    for (int k = 0; k < n; ++k) {
-      const Node a = loop[k], b = loop[(k + 1) % n];
-      // Walk every unit edge along the loop side.
-      const int di = (b.first > a.first) - (b.first < a.first), dj = (b.second > a.second) - (b.second < a.second);
-      for (Node p = a; p != b;) {
-        const Node q{p.first + di, p.second + dj};
-        if (route_edges_.count({p, q})) return true;
-        p = q;
-      }
-    }
-    return false;
+  static PathMotion DrivePath(const std::vector<Vec2>& pts) {
+    PathMotion path;
+    path.closed = false;
+    for (const Vec2& q : pts) path.waypoints.push_back(At(q, 0.0));
+    return path;
   }
 
-  void MakeMovingCars() {
-    std::mt19937_64 rng = Rng("moving_cars");
-    // Candidate loops: around one block or two, not driving the route's lane direction.
-    std::vector<PathMotion> loops;
-    for (int i = imin_; i < imax_; ++i) {
-      for (int j = jmin_; j < jmax_; ++j) {
-        for (int w = 1; w <= 2; ++w) {
-          for (bool ccw : {true, false}) {
-            const std::vector<Node> loop = LoopNodes(i, j, std::min(i + w, imax_), j + 1, ccw);
-            if (loop[0] == loop[1] || SharesRouteDirection(loop)) continue;
-            loops.push_back(LanePath(loop, lane_, 0.0));
-          }
-        }
+  // Frame samples of both passes: camera position and the tracks of placed actors.
+  struct Sample {
+    Pass pass;
+    double t;
+    Vec2 camera;
+  };
+  struct Track {
+    std::vector<Vec2> pos;
+    std::vector<double> yaw;
+    double half_length = 0.3, half_width = 0.3;
+    bool car = false;
+  };
+
+  void MakeSamples() {
+    samples_.clear();
+    for (Pass pass : kBothPasses) {
+      for (int f = 0; f < world_.frames_per_pass[PassIndex(pass)]; ++f) {
+        const double t = FrameStamp(world_, f);
+        samples_.push_back({pass, t, CameraPoseAt(world_, pass, t).translation().head<2>()});
       }
     }
-    Shuffle(loops, rng);
-    if (loops.empty()) {  // a loop around the outer ring always exists
-      loops.push_back(LanePath(LoopNodes(imin_, jmin_, imax_, jmax_, true), lane_, 0.0));
+  }
+
+  Track TrackOf(const Object& o, double half_length, double half_width, bool car) const {
+    Track tr;
+    tr.half_length = half_length;
+    tr.half_width = half_width;
+    tr.car = car;
+    for (const Sample& s : samples_) {
+      const Eigen::Isometry3d T = ObjectPoseAt(o, s.pass, s.t);
+      tr.pos.push_back(T.translation().head<2>());
+      tr.yaw.push_back(std::atan2(T.linear()(1, 0), T.linear()(0, 0)));
     }
-    std::vector<int> placed;
-    for (int k = 0; k < spec_.moving_cars; ++k) {
-      Object& o = b_.AddObject(VehicleKind(rng, true));
+    return tr;
+  }
+
+  // Separating-axis ratio of two footprints inflated by `margin`: >= 1 means clear.
+  static double SatRatio(const Track& a, const Track& b, std::size_t i, double margin) {
+    const Vec2 ua(std::cos(a.yaw[i]), std::sin(a.yaw[i])), ub(std::cos(b.yaw[i]), std::sin(b.yaw[i]));
+    const Vec2 axes[4] = {ua, Vec2(-ua.y(), ua.x()), ub, Vec2(-ub.y(), ub.x())};
+    const Vec2 d = b.pos[i] - a.pos[i];
+    double best = 0;
+    for (const Vec2& u : axes) {
+      const double ra = (a.half_length + margin) * std::abs(u.dot(ua)) + (a.half_width + margin) * std::abs(u.x() * -ua.y() + u.y() * ua.x());
+      const double rb = (b.half_length + margin) * std::abs(u.dot(ub)) + (b.half_width + margin) * std::abs(u.x() * -ub.y() + u.y() * ub.x());
+      best = std::max(best, std::abs(d.dot(u)) / (ra + rb));
+    }
+    return best;
+  }
+
+  // How clear a track is: min over frames of distance to the camera / min_camera_m and
+  // the separating-axis ratio against placed actors; >= 1 is clear. Stops below `floor`.
+  double Clearance(const Track& tr, double min_camera_m, double floor) const {
+    double score = 1e9;
+    for (std::size_t i = 0; i < samples_.size(); ++i) {
+      score = std::min(score, (tr.pos[i] - samples_[i].camera).norm() / min_camera_m);
+      for (const Track& other : tracks_) {
+        // Cars keep 0.6 m between bodies, people 0.2 m from anyone.
+        const double margin = tr.car && other.car ? 0.3 : 0.1;
+        score = std::min(score, SatRatio(tr, other, i, margin));
+      }
+      if (score <= floor) break;
+    }
+    return score;
+  }
+
+  // Tries paths from `make(attempt)` on the object (moving, same in both passes) and
+  // keeps the clearest; records its track.
+  template <typename MakePath>
+  void PlaceMover(int index, double half_length, double half_width, bool car, double min_camera_m, int attempts,
+                  MakePath make) {
+    Object& o = world_.objects[index];
+    double best = -1;
+    std::array<Placement, 2> best_placement = o.placement;
+    Track best_track;
+    for (int a = 0; a < attempts; ++a) {
+      Placement p;
+      p.present = true;
+      p.moving = true;
+      p.path = make(a);
+      o.placement = {p, p};
+      Track tr = TrackOf(o, half_length, half_width, car);
+      const double score = Clearance(tr, min_camera_m, best);
+      if (score > best) {
+        best = score;
+        best_placement = o.placement;
+        best_track = std::move(tr);
+      }
+      if (best >= 1.0) break;
+    }
+    o.placement = best_placement;
+    tracks_.push_back(std::move(best_track));
+  }
+
+  static void VehicleSize(const std::string& kind, double* half_length, double* half_width) {
+    *half_length = kind == "bus" ? 5.6 : kind == "truck" ? 3.6 : 2.45;
+    *half_width = kind == "bus" ? 1.3 : kind == "truck" ? 1.2 : 1.0;
+  }
+
+  // Moving cars on the streets of the route: ahead of the camera in its direction of
+  // travel (the other lane if there are two, else its own lane, never slower than the
+  // camera), oncoming in the opposite lane, and crossing at the route's intersections.
+  void MakeMovingCars() {
+    std::mt19937_64 rng = Rng("moving_cars");
+    if (spec_.moving_cars <= 0) return;
+    const double ext = 300.0;  // straight extensions, so no path ends while in view
+    const double v_cam = spec_.camera_speed_mps;
+    const double route_len = lane_s_.back();
+    const std::vector<Node> fnodes = RouteNodes();
+    std::vector<Node> gnodes(fnodes.rbegin(), fnodes.rend());
+    const Poly2 forward(NodeLane(fnodes, lane_, ext, ext));
+    const double f0 = ext + block_ / 2;  // arc on `forward` of the camera's start
+    // A second lane in the camera's direction when the road is wide enough.
+    const double inner_lane = lane_ - 3.3;
+    const bool two_lanes = inner_lane >= 1.4;
+    const Poly2 same(NodeLane(fnodes, two_lanes ? inner_lane : lane_, ext, ext));
+    const double opposite_offset = (two_lanes ? inner_lane : lane_) + 0.1;
+    const Poly2 opposite(NodeLane(gnodes, opposite_offset, ext, ext));
+
+    // Intersections the camera approaches during the pass, with their route arc length.
+    struct Crossing {
+      Node node;
+      Vec2 arrive;  // direction the camera arrives in
+      double s;
+    };
+    std::vector<Crossing> crossings;
+    for (std::size_t k = 0; k < nodes_.size(); ++k) {
+      const double s = forward.Closest(NodePos(nodes_[k])) - f0;
+      const Vec2 dirs[4] = {Vec2(1, 0), Vec2(0, 1), Vec2(-1, 0), Vec2(0, -1)};
+      if (s > 16.0 && s < route_len + 20.0) crossings.push_back({nodes_[k], dirs[dirs_[k]], s});
+    }
+
+    std::vector<double> turns;  // route arc length of the turns
+    for (std::size_t k = 1; k + 1 < nodes_.size(); ++k) {
+      if (dirs_[k] != dirs_[k + 1]) turns.push_back(forward.Closest(NodePos(nodes_[k])) - f0);
+    }
+
+    // Roles in turn: ahead, oncoming, crossing, second ahead, then oncoming and crossing.
+    const int n = spec_.moving_cars;
+    std::vector<int> roles;
+    const int pattern[] = {0, 1, 2, 0, 1, 2};
+    for (int k = 0; k < n; ++k) roles.push_back(k < 6 ? pattern[k] : 1 + k % 2);
+    int ahead = 0, oncoming = 0, crossing = 0;
+    const int n_oncoming = static_cast<int>(std::count(roles.begin(), roles.end(), 1));
+    const int n_crossing = static_cast<int>(std::count(roles.begin(), roles.end(), 2));
+    double ahead_gap = 0, ahead_speed = 0;  // of the last car placed ahead
+    for (int k = 0; k < n; ++k) {
+      int role = roles[k];
+      if (role == 2 && crossings.empty()) role = 1;
+      const bool lead = role == 0 && !two_lanes;
+      Object& o = b_.AddObject(lead ? "car" : VehicleKind(rng, role != 0));
       o.parts.push_back(MakeVehicle(rng, o.category_name));
-      std::vector<PathMotion> mine;
-      for (std::size_t c = 0; c < loops.size(); ++c) mine.push_back(loops[(c + k * 3) % loops.size()]);
-      for (PathMotion& p : mine) p.speed_mps = spec_.moving_car_speed_mps * Uniform(rng, 0.85, 1.15);
-      PlaceOnPaths(&world_, rng, static_cast<int>(world_.objects.size()) - 1, mine, placed, /*min_camera_m=*/3.3, /*min_other_m=*/6.0, /*step_s=*/0.2);
-      placed.push_back(static_cast<int>(world_.objects.size()) - 1);
+      double hl, hw;
+      VehicleSize(o.category_name, &hl, &hw);
+      const int index = static_cast<int>(world_.objects.size()) - 1;
+      std::function<PathMotion(int)> make;
+      if (role == 0) {
+        // Ahead in the camera's direction. One lane: a queue in front of the camera,
+        // each car at least as fast as the one behind it.
+        const int rank = ahead++;
+        make = [&, rank, hl](int a) {
+          PathMotion p = DrivePath(same.p);
+          if (two_lanes) {
+            p.speed_mps = spec_.moving_car_speed_mps * Uniform(rng, 0.9, 1.2);
+            p.start_offset_m = f0 + Uniform(rng, 5.0, 25.0);
+            return p;
+          }
+          const double slack = 0.05 * a;
+          if (rank == 0) {
+            p.speed_mps = std::max(v_cam, spec_.moving_car_speed_mps) * Uniform(rng, 1.0, 1.04 + slack);
+            p.start_offset_m = f0 + Uniform(rng, 7.5, 10.0 + 2 * a) + (hl - 2.45);
+          } else {
+            p.speed_mps = ahead_speed * Uniform(rng, 1.0, 1.03 + slack);
+            p.start_offset_m = f0 + ahead_gap + Uniform(rng, 11.0, 16.0 + 2 * a) + (hl - 2.45);
+          }
+          return p;
+        };
+      } else if (role == 1) {
+        // Oncoming: meets the camera at a route position spread over the route.
+        const int rank = oncoming++;
+        make = [&, rank, n_oncoming](int a) {
+          PathMotion p = DrivePath(opposite.p);
+          p.speed_mps = spec_.moving_car_speed_mps * Uniform(rng, 0.85, 1.15);
+          const double lo = 10.0, hi = route_len - 5.0;
+          const double u = a < 10 ? (rank + Uniform(rng, 0.15, 0.85)) / n_oncoming : Uniform(rng, 0, 1);
+          double s_meet = lo + (hi - lo) * u;
+          // Not in a turn, where the car would pass beside the camera out of view.
+          for (double s_turn : turns) {
+            if (std::abs(s_meet - s_turn) < 15.0) s_meet = s_turn + (s_meet < s_turn ? -15.0 : 15.0);
+          }
+          const double q_meet = opposite.Closest(forward.At(f0 + s_meet));
+          p.start_offset_m = q_meet - p.speed_mps * s_meet / v_cam;
+          return p;
+        };
+      } else {
+        // Crossing: through an intersection ahead while the camera is 12-32 m before it.
+        const int rank = crossing++;
+        make = [&, rank, n_crossing](int a) {
+          const Crossing& c = crossings[a < 10 ? (rank * crossings.size() / std::max(1, n_crossing) + a / 3) % crossings.size()
+                                               : UniformInt(rng, 0, static_cast<int>(crossings.size()) - 1)];
+          const Vec2 d = Right(c.arrive) * (Chance(rng, 0.5) ? 1.0 : -1.0);
+          const Vec2 centre = NodePos(c.node) + Right(d) * lane_;
+          PathMotion p = DrivePath({centre - d * ext, centre + d * ext});
+          p.speed_mps = spec_.moving_car_speed_mps * Uniform(rng, 0.85, 1.15);
+          const double t_cross = std::max(0.0, c.s - Uniform(rng, 12.0, 32.0)) / v_cam;
+          p.start_offset_m = ext - p.speed_mps * t_cross;
+          return p;
+        };
+      }
+      PlaceMover(index, hl, hw, /*car=*/true, /*min_camera_m=*/3.15, 40, make);
+      if (role == 0 && !two_lanes) {
+        ahead_speed = world_.objects[index].placement[0].path.speed_mps;
+        ahead_gap = world_.objects[index].placement[0].path.start_offset_m - f0;
+      }
     }
   }
 
@@ -673,63 +928,76 @@ class CityBuilder {
     return o;
   }
 
-  // Pedestrians on sidewalk rings around blocks near the route; some walk around an
-  // intersection on its four crosswalks instead.
+  // Pedestrians on the sidewalks of the route's streets, walking both ways, each timed to
+  // be 12-30 m ahead of the camera at a time spread over the pass; crossing_share of them
+  // cross the route's street at a crosswalk ahead while the camera is 16-32 m away.
   void MakePedestrians() {
     std::mt19937_64 rng = Rng("pedestrians");
-    std::set<Node> near_blocks, near_nodes;
-    for (const Node& n : nodes_) {
-      near_nodes.insert(n);
-      for (int di = -1; di <= 0; ++di) {
-        for (int dj = -1; dj <= 0; ++dj) near_blocks.insert({n.first + di, n.second + dj});
-      }
+    const int n = spec_.pedestrians;
+    if (n <= 0) return;
+    const double ext = 300.0;
+    const double v_cam = spec_.camera_speed_mps;
+    const double duration = (world_.frames_per_pass[0] - 1) / s_.camera.fps;
+    const Poly2 forward(NodeLane(RouteNodes(), lane_, ext, ext));
+    const double f0 = ext + block_ / 2;
+    auto axis_dir = [](const Vec2& t) {
+      return std::abs(t.x()) >= std::abs(t.y()) ? Vec2(t.x() > 0 ? 1 : -1, 0) : Vec2(0, t.y() > 0 ? 1 : -1);
+    };
+    // Crosswalks on the arms the camera arrives on, with their route arc length.
+    struct Crosswalk {
+      Vec2 centre, along;
+      double s;
+    };
+    std::vector<Crosswalk> crosswalks;
+    const Vec2 dirs[4] = {Vec2(1, 0), Vec2(0, 1), Vec2(-1, 0), Vec2(0, -1)};
+    for (std::size_t k = 0; k < nodes_.size(); ++k) {
+      const Vec2 a = dirs[dirs_[k]];
+      const Vec2 centre = NodePos(nodes_[k]) - a * (road_ / 2 + 2.0);
+      const double s = forward.Closest(centre + Right(a) * lane_) - f0;
+      if (s > 24.0 && s < lane_s_.back() + 30.0) crosswalks.push_back({centre, a, s});
     }
-    // Sidewalk rings, both walking directions.
-    std::vector<PathMotion> rings;
-    const double ring = road_ / 2 + walk_ * 0.55;
-    for (const Node& blk : near_blocks) {
-      const Vec2 lo = NodePos(blk) + Vec2::Constant(ring), hi = NodePos({blk.first + 1, blk.second + 1}) - Vec2::Constant(ring);
-      for (bool ccw : {true, false}) {
-        PathMotion p;
-        p.waypoints = {At(lo, kCurbHeightM), At(Vec2(hi.x(), lo.y()), kCurbHeightM), At(hi, kCurbHeightM), At(Vec2(lo.x(), hi.y()), kCurbHeightM)};
-        if (!ccw) std::reverse(p.waypoints.begin(), p.waypoints.end());
-        rings.push_back(p);
-      }
-    }
-    // Crossing loops around intersections, stepping down from the curb onto the road.
-    std::vector<PathMotion> crossings;
-    const double q = road_ / 2 + 2.0;
-    for (const Node& n : near_nodes) {
-      const Vec2 c = NodePos(n);
-      const Vec2 corners[4] = {Vec2(q, q), Vec2(-q, q), Vec2(-q, -q), Vec2(q, -q)};
-      for (bool ccw : {true, false}) {
-        PathMotion p;
-        for (int k = 0; k < 4; ++k) {
-          const Vec2 a = corners[ccw ? k : 3 - k], b = corners[ccw ? (k + 1) % 4 : (6 - k) % 4];
-          const Vec2 d = (b - a).normalized();
-          p.waypoints.push_back(At(c + a, kCurbHeightM));
-          p.waypoints.push_back(At(c + a + d * (q - road_ / 2 - 0.15), kCurbHeightM));
-          p.waypoints.push_back(At(c + a + d * (q - road_ / 2 + 0.15), 0.0));
-          p.waypoints.push_back(At(c + b - d * (q - road_ / 2 + 0.15), 0.0));
-          p.waypoints.push_back(At(c + b - d * (q - road_ / 2 - 0.15), kCurbHeightM));
-        }
-        crossings.push_back(p);
-      }
-    }
-    Shuffle(rings, rng);
-    Shuffle(crossings, rng);
-    const int crossing_count = static_cast<int>(std::lround(spec_.crossing_share * spec_.pedestrians));
-    std::vector<int> people;
-    for (int k = 0; k < spec_.pedestrians; ++k) {
+    const int crossers = crosswalks.empty() ? 0 : static_cast<int>(std::lround(spec_.crossing_share * n));
+    for (int k = 0; k < n; ++k) {
       MakePedestrian(rng);
-      const std::vector<PathMotion>& pool = (k < crossing_count && !crossings.empty()) ? crossings : rings;
-      std::vector<PathMotion> mine;
-      for (std::size_t c = 0; c < pool.size(); ++c) mine.push_back(pool[(c + k) % pool.size()]);
+      const int index = static_cast<int>(world_.objects.size()) - 1;
       const double speed = spec_.pedestrian_speed_mps * Uniform(rng, 0.85, 1.15);
-      for (PathMotion& p : mine) p.speed_mps = speed;
-      // Crossers must keep clear of the camera car as it drives through.
-      PlaceOnPaths(&world_, rng, static_cast<int>(world_.objects.size()) - 1, mine, people, /*min_camera_m=*/2.5, /*min_other_m=*/0.9, /*step_s=*/0.25);
-      people.push_back(static_cast<int>(world_.objects.size()) - 1);
+      std::function<PathMotion(int)> make;
+      if (k < crossers) {
+        make = [&, k, speed](int a) {
+          const Crosswalk& c = crosswalks[(k * crosswalks.size() / crossers + a / 4) % crosswalks.size()];
+          const double side = Chance(rng, 0.5) ? 1.0 : -1.0;  // starts right (+1) or left
+          const double w = road_ / 2 + walk_ * Uniform(rng, 0.45, 0.6);
+          const Vec2 from = c.centre + Right(c.along) * side * w, to = c.centre - Right(c.along) * side * w;
+          const double before = Chance(rng, 0.5) ? 1.0 : -1.0, after = Chance(rng, 0.5) ? 1.0 : -1.0;
+          const double leg = 60.0;
+          PathMotion p = WalkPath({from + c.along * before * leg, from, to, to + c.along * after * leg});
+          p.speed_mps = speed;
+          // In the middle of the street when the camera is 16-32 m before the crosswalk.
+          const double t_mid = std::max(0.0, c.s - Uniform(rng, 16.0, 32.0)) / v_cam;
+          p.start_offset_m = leg + w - speed * t_mid;
+          return p;
+        };
+      } else {
+        const int rank = k - crossers, walkers = n - crossers;
+        make = [&, rank, walkers, speed](int a) {
+          const double u = a < 10 ? (rank + Uniform(rng, 0.1, 0.9)) / walkers : Uniform(rng, 0, 1);
+          const double t_meet = u * duration;
+          const double s = v_cam * t_meet + Uniform(rng, 12.0, 30.0);
+          const Vec2 along = axis_dir(forward.Tangent(f0 + s));
+          Vec2 axis = forward.At(f0 + s) - Right(along) * lane_;
+          if (along.x() != 0) axis.y() = block_ * std::round(axis.y() / block_);  // snap to the street line
+          else axis.x() = block_ * std::round(axis.x() / block_);
+          const double side = (rank + a) % 2 == 0 ? 1.0 : -1.0;
+          const Vec2 at = axis + Right(along) * side * (road_ / 2 + walk_ * Uniform(rng, 0.45, 0.6));
+          const double heading = Chance(rng, 0.5) ? 1.0 : -1.0;
+          const double leg = 80.0;
+          PathMotion p = WalkPath({at - along * heading * leg, at + along * heading * leg});
+          p.speed_mps = speed;
+          p.start_offset_m = leg - speed * t_meet;
+          return p;
+        };
+      }
+      PlaceMover(index, 0.3, 0.3, /*car=*/false, /*min_camera_m=*/4.2, 40, make);
     }
   }
 
@@ -798,6 +1066,8 @@ class CityBuilder {
   std::vector<Vec2> lane_pts_;
   std::vector<double> lane_s_;
   std::vector<Slot> slots_;
+  std::vector<Sample> samples_;  // frames of both passes
+  std::vector<Track> tracks_;    // placed moving actors
 };
 
 }  // namespace
