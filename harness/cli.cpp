@@ -23,6 +23,7 @@ int RunCli(int argc, char** argv) {
   AddGenerateCommand(app, &action);
   AddBenchCommand(app, &action);
   AddPreviewCommand(app, &action);
+  AddSegEvalCommand(app, &action);
 
   try {
     app.parse(argc, argv);

@@ -11,5 +11,6 @@ namespace segslam::harness {
 void AddGenerateCommand(CLI::App& app, std::function<int()>* action);
 void AddBenchCommand(CLI::App& app, std::function<int()>* action);
 void AddPreviewCommand(CLI::App& app, std::function<int()>* action);
+void AddSegEvalCommand(CLI::App& app, std::function<int()>* action);
 
 }  // namespace segslam::harness

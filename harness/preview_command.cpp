@@ -6,6 +6,7 @@
 #include "core/atomic_file.h"
 #include "core/tum_dataset.h"
 #include "harness/commands.h"
+#include "harness/pictures.h"
 
 #include <fmt/format.h>
 #include <opencv2/imgproc.hpp>
@@ -22,36 +23,6 @@ struct PreviewArgs {
   std::string out_file;
   double max_depth_m = 0;  // 0 = the 98th percentile of the first frame
 };
-
-// A stable, well-spread colour per instance id.
-cv::Vec3b InstanceColor(std::uint16_t id) {
-  const unsigned hash = id * 2654435761u;
-  return {static_cast<uchar>(64 + (hash & 0x7f)), static_cast<uchar>(64 + ((hash >> 8) & 0x7f)),
-          static_cast<uchar>(64 + ((hash >> 16) & 0x7f))};
-}
-
-cv::Mat DepthPicture(const cv::Mat& depth_m, double max_depth_m) {
-  cv::Mat scaled;
-  depth_m.convertTo(scaled, CV_8U, 255.0 / max_depth_m);
-  cv::Mat colored;
-  cv::applyColorMap(scaled, colored, cv::COLORMAP_TURBO);
-  colored.setTo(cv::Scalar(0, 0, 0), depth_m == 0.f);
-  return colored;
-}
-
-cv::Mat OverlayPicture(const cv::Mat& color_bgr, const cv::Mat& ids) {
-  cv::Mat overlay = color_bgr.clone();
-  for (int v = 0; v < ids.rows; ++v) {
-    for (int u = 0; u < ids.cols; ++u) {
-      const std::uint16_t id = ids.at<std::uint16_t>(v, u);
-      if (id == 0) continue;
-      cv::Vec3b& pixel = overlay.at<cv::Vec3b>(v, u);
-      const cv::Vec3b tint = InstanceColor(id);
-      for (int c = 0; c < 3; ++c) pixel[c] = static_cast<uchar>((pixel[c] + 2 * tint[c]) / 3);
-    }
-  }
-  return overlay;
-}
 
 int RunPreview(const PreviewArgs& args) {
   namespace fs = std::filesystem;
@@ -77,12 +48,10 @@ int RunPreview(const PreviewArgs& args) {
     cv::Mat overlay = fs::exists(mask_file)
                           ? OverlayPicture(frame.color_bgr, ReadInstanceMask(mask_file))
                           : frame.color_bgr.clone();
-    cv::Mat row;
-    cv::hconcat(std::vector<cv::Mat>{frame.color_bgr, DepthPicture(frame.depth_m, max_depth_m), overlay},
-                row);
-    cv::putText(row, fmt::format("frame {}  t={:.3f}s  depth 0..{:.1f} m", index, frame.stamp_s, max_depth_m),
-                {8, 20}, cv::FONT_HERSHEY_SIMPLEX, 0.5, {255, 255, 255}, 1, cv::LINE_AA);
-    rows.push_back(row);
+    rows.push_back(CaptionedRow(
+        {frame.color_bgr, DepthPicture(frame.depth_m, max_depth_m), overlay},
+        {fmt::format("frame {}  t={:.3f} s", index, frame.stamp_s),
+         fmt::format("depth 0..{:.1f} m", max_depth_m), "instances"}));
   }
   cv::Mat sheet;
   cv::vconcat(rows, sheet);

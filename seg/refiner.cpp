@@ -1,0 +1,586 @@
+#include "seg/refiner.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <numeric>
+#include <sstream>
+
+#include "core/error.h"
+
+namespace segslam::seg {
+namespace {
+
+// Bounding box, area and barycentre of a CV_8U mask (non-zero = inside).
+struct RegionStats {
+  cv::Rect bbox;
+  int area_px = 0;
+  double cx = 0, cy = 0;
+};
+
+// Row-wise scan; rows without any set pixel are skipped 8 bytes at a time.
+RegionStats Measure(const cv::Mat& mask) {
+  RegionStats s;
+  int x_min = mask.cols, x_max = -1, y_min = mask.rows, y_max = -1;
+  std::int64_t sum_x = 0, sum_y = 0;
+  for (int y = 0; y < mask.rows; ++y) {
+    const std::uint8_t* row = mask.ptr<std::uint8_t>(y);
+    int x = 0;
+    // Skip leading zero words.
+    for (; x + 8 <= mask.cols; x += 8) {
+      std::uint64_t word;
+      std::memcpy(&word, row + x, 8);
+      if (word != 0) break;
+    }
+    if (x >= mask.cols) continue;
+    // Skip trailing zero words.
+    int end = mask.cols;
+    while (end - 8 >= x + 8 && end % 8 == 0) {
+      std::uint64_t word;
+      std::memcpy(&word, row + end - 8, 8);
+      if (word != 0) break;
+      end -= 8;
+    }
+    int count = 0, first = -1, last = -1;
+    std::int64_t row_sum = 0;
+    for (; x < end; ++x) {
+      if (row[x]) {
+        if (first < 0) first = x;
+        last = x;
+        ++count;
+        row_sum += x;
+      }
+    }
+    if (count == 0) continue;
+    x_min = std::min(x_min, first);
+    x_max = std::max(x_max, last);
+    y_min = std::min(y_min, y);
+    y_max = y;
+    s.area_px += count;
+    sum_x += row_sum;
+    sum_y += static_cast<std::int64_t>(y) * count;
+  }
+  if (s.area_px > 0) {
+    s.bbox = cv::Rect(x_min, y_min, x_max - x_min + 1, y_max - y_min + 1);
+    s.cx = static_cast<double>(sum_x) / s.area_px;
+    s.cy = static_cast<double>(sum_y) / s.area_px;
+  }
+  return s;
+}
+
+void CheckInputImage(const cv::Mat& image, int type, const PinholeCamera& camera,
+                     const char* what) {
+  if (image.type() != type || image.cols != camera.width || image.rows != camera.height) {
+    throw Error(std::string("refiner: ") + what + " must be " +
+                (type == CV_32F ? "CV_32F" : "CV_8U") + " of the camera's size " +
+                std::to_string(camera.width) + "x" + std::to_string(camera.height));
+  }
+}
+
+// One projected point: target position, depth and footprint half-extents.
+struct Splat {
+  float u, v, z, hx, hy;
+};
+
+}  // namespace
+
+bool RefinerOptions::IsValid(std::string* error) const {
+  auto fail = [&](const std::string& message) {
+    if (error) *error = message;
+    return false;
+  };
+  auto finite = [](double x) { return std::isfinite(x); };
+  if (!finite(w_barycenter) || w_barycenter < 0) return fail("w_barycenter must be >= 0");
+  if (!finite(w_shape) || w_shape < 0) return fail("w_shape must be >= 0");
+  if (w_barycenter == 0 && w_shape == 0) {
+    return fail("w_barycenter and w_shape must not both be 0");
+  }
+  if (!finite(max_match_cost) || max_match_cost <= 0) {
+    return fail("max_match_cost must be > 0");
+  }
+  if (!finite(splat_footprint_scale) || splat_footprint_scale < 0.5 ||
+      splat_footprint_scale > 3) {
+    return fail("splat_footprint_scale must lie in [0.5, 3]");
+  }
+  if (hole_fill_iterations < 0 || hole_fill_iterations > 8) {
+    return fail("hole_fill_iterations must lie in [0, 8]");
+  }
+  if (!finite(depth_tolerance) || depth_tolerance < 0 || depth_tolerance >= 1) {
+    return fail("depth_tolerance must lie in [0, 1)");
+  }
+  if (!finite(min_depth_m) || min_depth_m <= 0) return fail("min_depth_m must be > 0");
+  if (min_projected_area_px < 0) return fail("min_projected_area_px must be >= 0");
+  if (!finite(repair_min_current_inside) || repair_min_current_inside <= 0 ||
+      repair_min_current_inside > 1) {
+    return fail("repair_min_current_inside must lie in (0, 1]");
+  }
+  if (!finite(repair_max_projected_covered) || repair_max_projected_covered <= 0 ||
+      repair_max_projected_covered > 1) {
+    return fail("repair_max_projected_covered must lie in (0, 1]");
+  }
+  if (!finite(added_score_decay) || added_score_decay <= 0 || added_score_decay > 1) {
+    return fail("added_score_decay must lie in (0, 1]");
+  }
+  if (!finite(min_added_score) || min_added_score < 0 || min_added_score > 1) {
+    return fail("min_added_score must lie in [0, 1]");
+  }
+  return true;
+}
+
+// Z-buffer and label image (region index + 1) shared by all regions of one projection.
+// Both are kept between calls; only `dirty` (the area the last call wrote) is reset.
+struct ProjectionWorkspace {
+  cv::Mat zbuf;   // CV_32F, +inf = empty
+  cv::Mat label;  // CV_16U, 0 = empty
+  cv::Rect dirty;
+  std::vector<RegionStats> regions;  // per previous region: box, area, barycentre
+  std::vector<cv::Rect> touched;
+  std::vector<Splat> splats;
+  std::vector<float> depths;
+};
+
+namespace {
+
+// The projection proper: fills ws->label/zbuf and ws->regions.
+void ProjectInto(const RefinerOptions& options, const PinholeCamera& camera,
+                 const FrameSegmentation& previous_refined, const cv::Mat& previous_depth_m,
+                 const Eigen::Isometry3d& T_cur_prev,
+                 const std::map<std::uint16_t, Eigen::Isometry3d>& instance_motion_prev,
+                 ProjectionWorkspace* ws) {
+  const int W = camera.width, H = camera.height;
+  CheckInputImage(previous_depth_m, CV_32F, camera, "previous depth");
+  const size_t n = previous_refined.instances.size();
+  if (ws->zbuf.rows != H || ws->zbuf.cols != W) {
+    ws->zbuf.create(H, W, CV_32F);
+    ws->zbuf.setTo(std::numeric_limits<float>::infinity());
+    ws->label.create(H, W, CV_16U);
+    ws->label.setTo(0);
+  } else if (!ws->dirty.empty()) {
+    ws->zbuf(ws->dirty).setTo(std::numeric_limits<float>::infinity());
+    ws->label(ws->dirty).setTo(0);
+  }
+  ws->dirty = cv::Rect();
+  ws->regions.assign(n, RegionStats());
+  ws->touched.assign(n, cv::Rect());
+  if (n == 0) return;
+
+  // Normalised ray coordinates per column / row.
+  std::vector<double> xn(W), yn(H);
+  for (int u = 0; u < W; ++u) xn[u] = (u - camera.cx) / camera.fx;
+  for (int v = 0; v < H; ++v) yn[v] = (v - camera.cy) / camera.fy;
+  const double fx = camera.fx, fy = camera.fy, cx = camera.cx, cy = camera.cy;
+  const double footprint = options.splat_footprint_scale;
+
+  cv::Mat& zbuf = ws->zbuf;
+  cv::Mat& label = ws->label;
+  std::vector<cv::Rect>& touched = ws->touched;  // bbox of pixels each region wrote
+  cv::Rect all_touched;
+  std::vector<Splat>& splats = ws->splats;
+  std::vector<float>& depths = ws->depths;
+
+  for (size_t i = 0; i < n; ++i) {
+    const InstanceMask& instance = previous_refined.instances[i];
+    CheckInputImage(instance.mask, CV_8U, camera, "previous instance mask");
+    const RegionStats stats = Measure(instance.mask);
+    if (stats.area_px == 0) continue;
+    const auto motion = instance_motion_prev.find(instance.track_id);
+    const Eigen::Isometry3d& T =
+        motion != instance_motion_prev.end() ? motion->second : T_cur_prev;
+    const Eigen::Matrix3d R = T.linear();
+    const Eigen::Vector3d t = T.translation();
+
+    // Median depth of the region's measured pixels, for pixels without depth.
+    float fill_depth = 0;
+    if (options.fill_missing_depth_with_median) {
+      depths.clear();
+      bool any_missing = false;
+      for (int v = stats.bbox.y; v < stats.bbox.br().y; ++v) {
+        const std::uint8_t* m = instance.mask.ptr<std::uint8_t>(v);
+        const float* d = previous_depth_m.ptr<float>(v);
+        for (int u = stats.bbox.x; u < stats.bbox.br().x; ++u) {
+          if (!m[u]) continue;
+          if (d[u] > 0 && std::isfinite(d[u])) {
+            depths.push_back(d[u]);
+          } else {
+            any_missing = true;
+          }
+        }
+      }
+      if (any_missing && !depths.empty()) {
+        auto mid = depths.begin() + depths.size() / 2;
+        std::nth_element(depths.begin(), mid, depths.end());
+        fill_depth = *mid;
+      }
+    }
+
+    // Project: X' = z * R * ray + t, ray = (xn, yn, 1).
+    splats.clear();
+    for (int v = stats.bbox.y; v < stats.bbox.br().y; ++v) {
+      const std::uint8_t* m = instance.mask.ptr<std::uint8_t>(v);
+      const float* d = previous_depth_m.ptr<float>(v);
+      const Eigen::Vector3d row_base = R.col(1) * yn[v] + R.col(2);
+      for (int u = stats.bbox.x; u < stats.bbox.br().x; ++u) {
+        if (!m[u]) continue;
+        float z = d[u];
+        if (!(z > 0 && std::isfinite(z))) {
+          if (fill_depth <= 0) continue;
+          z = fill_depth;
+        }
+        const Eigen::Vector3d ray = R.col(0) * xn[u] + row_base;
+        const Eigen::Vector3d X = static_cast<double>(z) * ray + t;
+        if (X.z() < options.min_depth_m) continue;
+        const double inv_z = 1.0 / X.z();
+        const double xp = X.x() * inv_z, yp = X.y() * inv_z;
+        const double up = fx * xp + cx, vp = fy * yp + cy;
+        if (up < -1.5 || vp < -1.5 || up > W + 0.5 || vp > H + 0.5) continue;
+        // Local warp Jacobian for a surface fronto-parallel to the previous camera;
+        // the footprint is the axis-aligned box of the source pixel's image.
+        const double s = z * inv_z;
+        const double j00 = s * (R(0, 0) - xp * R(2, 0));
+        const double j01 = s * (fx / fy) * (R(0, 1) - xp * R(2, 1));
+        const double j10 = s * (fy / fx) * (R(1, 0) - yp * R(2, 0));
+        const double j11 = s * (R(1, 1) - yp * R(2, 1));
+        const double hx = 0.5 * footprint * (std::abs(j00) + std::abs(j01));
+        const double hy = 0.5 * footprint * (std::abs(j10) + std::abs(j11));
+        splats.push_back({static_cast<float>(up), static_cast<float>(vp),
+                          static_cast<float>(X.z()), static_cast<float>(hx),
+                          static_cast<float>(hy)});
+      }
+    }
+
+    // Splat into the shared z-buffer: pixel centres in [u - hx, u + hx) x [v - hy, v + hy).
+    const std::uint16_t id = static_cast<std::uint16_t>(i + 1);
+    int bx0 = W, by0 = H, bx1 = -1, by1 = -1;
+    for (const Splat& p : splats) {
+      const int x0 = std::max(0, static_cast<int>(std::ceil(p.u - p.hx)));
+      const int x1 = std::min(W - 1, static_cast<int>(std::ceil(p.u + p.hx)) - 1);
+      const int y0 = std::max(0, static_cast<int>(std::ceil(p.v - p.hy)));
+      const int y1 = std::min(H - 1, static_cast<int>(std::ceil(p.v + p.hy)) - 1);
+      if (x0 > x1 || y0 > y1) continue;
+      bx0 = std::min(bx0, x0);
+      bx1 = std::max(bx1, x1);
+      by0 = std::min(by0, y0);
+      by1 = std::max(by1, y1);
+      for (int y = y0; y <= y1; ++y) {
+        float* zr = zbuf.ptr<float>(y);
+        std::uint16_t* lr = label.ptr<std::uint16_t>(y);
+        for (int x = x0; x <= x1; ++x) {
+          if (p.z < zr[x]) {
+            zr[x] = p.z;
+            lr[x] = id;
+          }
+        }
+      }
+    }
+    if (bx1 >= 0) {
+      touched[i] = cv::Rect(bx0, by0, bx1 - bx0 + 1, by1 - by0 + 1);
+      all_touched = all_touched.empty() ? touched[i] : (all_touched | touched[i]);
+    }
+  }
+
+  // Depth-aware closing: a pixel that is empty, or shows something farther than the
+  // region on both of its sides, is a crack in that region.
+  const float tol = static_cast<float>(1.0 + options.depth_tolerance);
+  const cv::Rect inner = all_touched & cv::Rect(1, 1, W - 2, H - 2);
+  for (int iteration = 0; iteration < options.hole_fill_iterations; ++iteration) {
+    int filled = 0;
+    for (int y = inner.y; y < inner.br().y; ++y) {
+      float* zr = zbuf.ptr<float>(y);
+      std::uint16_t* lr = label.ptr<std::uint16_t>(y);
+      const std::uint16_t* lu = label.ptr<std::uint16_t>(y - 1);
+      const std::uint16_t* ld = label.ptr<std::uint16_t>(y + 1);
+      const float* zu = zbuf.ptr<float>(y - 1);
+      const float* zd = zbuf.ptr<float>(y + 1);
+      for (int x = inner.x; x < inner.br().x; ++x) {
+        std::uint16_t l = 0;
+        float z = 0;
+        if (lr[x - 1] != 0 && lr[x - 1] == lr[x + 1] && lr[x - 1] != lr[x]) {
+          l = lr[x - 1];
+          z = 0.5f * (zr[x - 1] + zr[x + 1]);
+        } else if (lu[x] != 0 && lu[x] == ld[x] && lu[x] != lr[x]) {
+          l = lu[x];
+          z = 0.5f * (zu[x] + zd[x]);
+        } else {
+          continue;
+        }
+        if (lr[x] == 0 || zr[x] > z * tol) {
+          lr[x] = l;
+          zr[x] = z;
+          ++filled;
+        }
+      }
+    }
+    if (filled == 0) break;
+  }
+
+  ws->dirty = all_touched;
+
+  // Per region: box, area and barycentre of its visible pixels, within the box it
+  // wrote (closing stays inside it).
+  for (size_t i = 0; i < n; ++i) {
+    if (touched[i].empty()) continue;
+    RegionStats& s = ws->regions[i];
+    const std::uint16_t id = static_cast<std::uint16_t>(i + 1);
+    int bx0 = W, by0 = H, bx1 = -1, by1 = -1;
+    std::int64_t sum_x = 0, sum_y = 0;
+    for (int y = touched[i].y; y < touched[i].br().y; ++y) {
+      const std::uint16_t* lr = label.ptr<std::uint16_t>(y);
+      int count = 0;
+      for (int x = touched[i].x; x < touched[i].br().x; ++x) {
+        if (lr[x] == id) {
+          bx0 = std::min(bx0, x);
+          bx1 = std::max(bx1, x);
+          ++count;
+          sum_x += x;
+        }
+      }
+      if (count > 0) {
+        by0 = std::min(by0, y);
+        by1 = y;
+        s.area_px += count;
+        sum_y += static_cast<std::int64_t>(y) * count;
+      }
+    }
+    if (s.area_px > 0) {
+      s.bbox = cv::Rect(bx0, by0, bx1 - bx0 + 1, by1 - by0 + 1);
+      s.cx = static_cast<double>(sum_x) / s.area_px;
+      s.cy = static_cast<double>(sum_y) / s.area_px;
+    }
+  }
+}
+
+// Frame-sized CV_8U mask of projected region i.
+cv::Mat RegionMask(const ProjectionWorkspace& ws, size_t i) {
+  cv::Mat mask(ws.label.size(), CV_8U, cv::Scalar(0));
+  const cv::Rect& box = ws.regions[i].bbox;
+  const std::uint16_t id = static_cast<std::uint16_t>(i + 1);
+  for (int y = box.y; y < box.br().y; ++y) {
+    const std::uint16_t* lr = ws.label.ptr<std::uint16_t>(y);
+    std::uint8_t* m = mask.ptr<std::uint8_t>(y);
+    for (int x = box.x; x < box.br().x; ++x) m[x] = lr[x] == id;
+  }
+  return mask;
+}
+
+// Pixels of projected region i that are set in `mask` (with box `mask_box`).
+int IntersectionWithLabel(const ProjectionWorkspace& ws, size_t i, const cv::Mat& mask,
+                          const cv::Rect& mask_box) {
+  const cv::Rect r = ws.regions[i].bbox & mask_box;
+  const std::uint16_t id = static_cast<std::uint16_t>(i + 1);
+  int count = 0;
+  for (int y = r.y; y < r.y + r.height; ++y) {
+    const std::uint16_t* lr = ws.label.ptr<std::uint16_t>(y);
+    const std::uint8_t* m = mask.ptr<std::uint8_t>(y);
+    for (int x = r.x; x < r.x + r.width; ++x) count += (lr[x] == id) & (m[x] != 0);
+  }
+  return count;
+}
+
+}  // namespace
+
+std::vector<ProjectedRegion> ProjectRegions(
+    const RefinerOptions& options, const PinholeCamera& camera,
+    const FrameSegmentation& previous_refined, const cv::Mat& previous_depth_m,
+    const Eigen::Isometry3d& T_cur_prev,
+    const std::map<std::uint16_t, Eigen::Isometry3d>& instance_motion_prev) {
+  ProjectionWorkspace ws;
+  ProjectInto(options, camera, previous_refined, previous_depth_m, T_cur_prev,
+              instance_motion_prev, &ws);
+  std::vector<ProjectedRegion> out(previous_refined.instances.size());
+  for (size_t i = 0; i < out.size(); ++i) {
+    out[i].mask = RegionMask(ws, i);
+    out[i].area_px = ws.regions[i].area_px;
+    out[i].bbox = ws.regions[i].bbox;
+  }
+  return out;
+}
+
+const char* ToString(RegionDecision::Kind kind) {
+  switch (kind) {
+    case RegionDecision::Kind::kNew: return "new";
+    case RegionDecision::Kind::kKept: return "kept";
+    case RegionDecision::Kind::kReplaced: return "replaced";
+    case RegionDecision::Kind::kAdded: return "added";
+    case RegionDecision::Kind::kDropped: return "dropped";
+  }
+  return "unknown";
+}
+
+std::string RefinementResult::BriefReport() const {
+  int counts[5] = {0, 0, 0, 0, 0};
+  for (const RegionDecision& d : decisions) ++counts[static_cast<int>(d.kind)];
+  std::ostringstream s;
+  s << "kept " << counts[1] << " replaced " << counts[2] << " new " << counts[0]
+    << " added " << counts[3] << " dropped " << counts[4];
+  return s.str();
+}
+
+SegmentationRefiner::~SegmentationRefiner() = default;
+
+SegmentationRefiner::SegmentationRefiner(RefinerOptions options)
+    : options_(std::move(options)), workspace_(std::make_unique<ProjectionWorkspace>()) {
+  std::string error;
+  if (!options_.IsValid(&error)) throw Error("refiner options: " + error);
+}
+
+std::uint16_t SegmentationRefiner::FreshId() {
+  if (next_track_id_ == std::numeric_limits<std::uint16_t>::max()) {
+    throw Error("refiner: track ids exhausted (65534 tracks)");
+  }
+  return next_track_id_++;
+}
+
+RefinementResult SegmentationRefiner::Refine(const RefinerInput& in) {
+  std::string error;
+  if (!in.camera.IsValid(&error)) throw Error("refiner camera: " + error);
+  const FrameSegmentation& current = in.current_initial;
+  const size_t n_cur = current.instances.size();
+  RefinementResult result;
+  result.refined.frame_index = current.frame_index;
+
+  // Ids handed out elsewhere (a loaded previous segmentation) are never reused.
+  if (in.previous_refined) {
+    for (const InstanceMask& p : in.previous_refined->instances) {
+      if (p.track_id >= next_track_id_ && p.track_id < 0xffff) {
+        next_track_id_ = static_cast<std::uint16_t>(p.track_id + 1);
+      }
+    }
+  }
+
+  // First frame (or no depth to project with): every region is new.
+  if (!in.previous_refined || in.previous_depth_m.empty()) {
+    for (size_t c = 0; c < n_cur; ++c) {
+      InstanceMask instance = current.instances[c];
+      instance.track_id = FreshId();
+      RegionDecision d;
+      d.kind = RegionDecision::Kind::kNew;
+      d.track_id = instance.track_id;
+      d.current_index = static_cast<int>(c);
+      result.decisions.push_back(d);
+      result.refined.instances.push_back(std::move(instance));
+    }
+    return result;
+  }
+
+  const FrameSegmentation& previous = *in.previous_refined;
+  const size_t n_prev = previous.instances.size();
+  const Eigen::Isometry3d T_cur_prev =
+      in.T_wc_current_coarse.inverse() * in.T_wc_previous_fine;
+  ProjectInto(options_, in.camera, previous, in.previous_depth_m, T_cur_prev,
+              in.instance_motion_prev, workspace_.get());
+  const ProjectionWorkspace& ws = *workspace_;
+  const std::vector<RegionStats>& prev_stats = ws.regions;
+
+  std::vector<RegionStats> cur_stats(n_cur);
+  for (size_t c = 0; c < n_cur; ++c) {
+    CheckInputImage(current.instances[c].mask, CV_8U, in.camera, "current instance mask");
+    cur_stats[c] = Measure(current.instances[c].mask);
+  }
+
+  // Candidate pairs under the threshold (paper eq. 2).
+  struct Candidate {
+    double cost;
+    int p, c, intersection;
+  };
+  std::vector<Candidate> candidates;
+  const double diagonal = std::hypot(in.camera.width, in.camera.height);
+  for (size_t p = 0; p < n_prev; ++p) {
+    if (prev_stats[p].area_px < std::max(1, options_.min_projected_area_px)) continue;
+    for (size_t c = 0; c < n_cur; ++c) {
+      if (cur_stats[c].area_px == 0) continue;
+      if (options_.require_same_category &&
+          previous.instances[p].category_id != current.instances[c].category_id) {
+        continue;
+      }
+      const int inter =
+          (prev_stats[p].bbox & cur_stats[c].bbox).empty()
+              ? 0
+              : IntersectionWithLabel(ws, p, current.instances[c].mask, cur_stats[c].bbox);
+      const double sum = prev_stats[p].area_px + cur_stats[c].area_px;
+      const double xor_area = sum - 2.0 * inter;
+      const double dist = std::hypot(prev_stats[p].cx - cur_stats[c].cx,
+                                     prev_stats[p].cy - cur_stats[c].cy) / diagonal;
+      const double cost =
+          options_.w_barycenter * dist + options_.w_shape * std::sqrt(xor_area / sum);
+      if (cost < options_.max_match_cost) {
+        candidates.push_back({cost, static_cast<int>(p), static_cast<int>(c), inter});
+      }
+    }
+  }
+  // One-to-one, greedily by increasing S (ties: lower indices first, deterministic).
+  std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
+    if (a.cost != b.cost) return a.cost < b.cost;
+    return a.p != b.p ? a.p < b.p : a.c < b.c;
+  });
+  std::vector<int> match_of_cur(n_cur, -1), match_of_prev(n_prev, -1);
+  std::vector<const Candidate*> cand_of_cur(n_cur, nullptr);
+  for (const Candidate& k : candidates) {
+    if (match_of_cur[k.c] >= 0 || match_of_prev[k.p] >= 0) continue;
+    match_of_cur[k.c] = k.p;
+    match_of_prev[k.p] = k.c;
+    cand_of_cur[k.c] = &k;
+  }
+
+  // Current regions: keep or replace (Algorithm 1), or new.
+  for (size_t c = 0; c < n_cur; ++c) {
+    InstanceMask instance = current.instances[c];
+    RegionDecision d;
+    d.current_index = static_cast<int>(c);
+    const int p = match_of_cur[c];
+    if (p < 0) {
+      d.kind = RegionDecision::Kind::kNew;
+      instance.track_id = FreshId();
+    } else {
+      const Candidate& k = *cand_of_cur[c];
+      const double ra_c = static_cast<double>(k.intersection) / cur_stats[c].area_px;
+      const double ra_p = static_cast<double>(k.intersection) / prev_stats[p].area_px;
+      bool replace = ra_c < ra_p;  // the paper's rule: |Re_c| > |Re_p|
+      if (options_.repair_missing_parts && ra_c >= options_.repair_min_current_inside &&
+          ra_p < options_.repair_max_projected_covered) {
+        replace = true;
+      }
+      d.kind = replace ? RegionDecision::Kind::kReplaced : RegionDecision::Kind::kKept;
+      d.previous_index = p;
+      d.cost = k.cost;
+      d.ratio_current = ra_c;
+      d.ratio_projected = ra_p;
+      d.projected_area_px = prev_stats[p].area_px;
+      instance.track_id = previous.instances[p].track_id;
+      if (replace) instance.mask = RegionMask(ws, p);
+    }
+    d.track_id = instance.track_id;
+    result.decisions.push_back(d);
+    result.refined.instances.push_back(std::move(instance));
+  }
+
+  // Unmatched projections: add back missed instances.
+  const bool count_rule_holds = n_prev > n_cur;
+  for (size_t p = 0; p < n_prev; ++p) {
+    if (match_of_prev[p] >= 0) continue;
+    const InstanceMask& prev = previous.instances[p];
+    RegionDecision d;
+    d.previous_index = static_cast<int>(p);
+    d.track_id = prev.track_id;
+    d.projected_area_px = prev_stats[p].area_px;
+    const float score = static_cast<float>(prev.score * options_.added_score_decay);
+    const bool rule = options_.add_unmatched == AddUnmatchedRule::kAlways ||
+                      (options_.add_unmatched == AddUnmatchedRule::kPaperCountRule &&
+                       count_rule_holds);
+    const bool add = rule && prev_stats[p].area_px >= std::max(1, options_.min_projected_area_px) &&
+                     score >= options_.min_added_score;
+    d.kind = add ? RegionDecision::Kind::kAdded : RegionDecision::Kind::kDropped;
+    if (add) {
+      InstanceMask instance;
+      instance.track_id = prev.track_id;
+      instance.category_id = prev.category_id;
+      instance.score = score;
+      instance.mask = RegionMask(ws, p);
+      result.refined.instances.push_back(std::move(instance));
+    }
+    result.decisions.push_back(d);
+  }
+  return result;
+}
+
+}  // namespace segslam::seg

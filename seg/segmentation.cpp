@@ -1,0 +1,24 @@
+#include "seg/segmentation.h"
+
+#include <algorithm>
+#include <numeric>
+
+namespace segslam::seg {
+
+cv::Mat FrameSegmentation::ToIdImage(cv::Size size) const {
+  cv::Mat ids(size, CV_16U, cv::Scalar(0));
+  // Paint from the lowest to the highest score so the best-scored instance wins overlaps.
+  std::vector<size_t> order(instances.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+    return instances[a].score < instances[b].score;
+  });
+  for (size_t i : order) {
+    const InstanceMask& instance = instances[i];
+    CV_Assert(instance.mask.type() == CV_8U && instance.mask.size() == size);
+    ids.setTo(instance.track_id, instance.mask);
+  }
+  return ids;
+}
+
+}  // namespace segslam::seg

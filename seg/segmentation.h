@@ -1,0 +1,33 @@
+// Instance segmentation of one frame, as every segmenter returns it and as the
+// refinement of the paper (seg/refiner.h) consumes and produces it.
+//
+// Images: masks are CV_8U, the frame's size, 1 inside the instance and 0 outside.
+// Ids: `track_id` is a per-sequence identity; a segmenter may number its detections
+// freely, the refiner makes ids stable over time where its matching says so.
+#pragma once
+
+#include <opencv2/core.hpp>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace segslam::seg {
+
+struct InstanceMask {
+  std::uint16_t track_id = 0;  // >= 1; 0 is never an instance
+  int category_id = 0;         // COCO category id (core/coco.h)
+  float score = 1.0f;          // confidence in [0, 1]; AP ranks detections by it
+  cv::Mat mask;                // CV_8U, frame-sized, 1 = instance pixel
+};
+
+struct FrameSegmentation {
+  int frame_index = 0;
+  std::vector<InstanceMask> instances;
+
+  // A 16-bit id image (CV_16U, 0 = background) of the instances; where masks overlap
+  // the higher-scoring instance wins. `size` is the frame size.
+  cv::Mat ToIdImage(cv::Size size) const;
+};
+
+}  // namespace segslam::seg

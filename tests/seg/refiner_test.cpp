@@ -1,0 +1,459 @@
+#include "seg/refiner.h"
+
+#include <cmath>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include "core/error.h"
+
+namespace segslam::seg {
+namespace {
+
+PinholeCamera TestCamera() {
+  PinholeCamera camera;
+  camera.width = 640;
+  camera.height = 480;
+  camera.fx = 500;
+  camera.fy = 500;
+  camera.cx = 319.5;
+  camera.cy = 239.5;
+  return camera;
+}
+
+cv::Mat RectMask(const cv::Rect& r) {
+  cv::Mat m(480, 640, CV_8U, cv::Scalar(0));
+  m(r).setTo(1);
+  return m;
+}
+
+InstanceMask Instance(std::uint16_t id, int category, const cv::Mat& mask,
+                      float score = 1.0f) {
+  InstanceMask instance;
+  instance.track_id = id;
+  instance.category_id = category;
+  instance.score = score;
+  instance.mask = mask;
+  return instance;
+}
+
+Eigen::Isometry3d Translation(double x, double y, double z) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.translation() = Eigen::Vector3d(x, y, z);
+  return T;
+}
+
+// The analytic projection of `source_rect` on the fronto-parallel plane z = depth_m of
+// the previous camera: a target pixel is inside when its ray meets the plane at a point
+// whose source pixel cell (centres at integers) lies in the rectangle.
+cv::Mat ExpectedProjection(const PinholeCamera& camera, const cv::Rect& source_rect,
+                           double depth_m, const Eigen::Isometry3d& T_cur_prev) {
+  cv::Mat expected(camera.height, camera.width, CV_8U, cv::Scalar(0));
+  const Eigen::Isometry3d T_prev_cur = T_cur_prev.inverse();
+  for (int y = 0; y < camera.height; ++y) {
+    for (int x = 0; x < camera.width; ++x) {
+      const Eigen::Vector3d ray = camera.BackProject(Eigen::Vector2d(x, y), 1.0);
+      const Eigen::Vector3d origin = T_prev_cur.translation();
+      const Eigen::Vector3d direction = T_prev_cur.linear() * ray;
+      if (direction.z() <= 0) continue;
+      const double lambda = (depth_m - origin.z()) / direction.z();
+      if (lambda <= 0) continue;
+      const Eigen::Vector2d source = camera.Project(origin + lambda * direction);
+      const int su = static_cast<int>(std::floor(source.x() + 0.5));
+      const int sv = static_cast<int>(std::floor(source.y() + 0.5));
+      if (source_rect.contains(cv::Point(su, sv))) expected.at<std::uint8_t>(y, x) = 1;
+    }
+  }
+  return expected;
+}
+
+// Pixels where `actual` differs from `expected` outside the 1-px band around
+// expected's border (dilate 3x3 minus erode 3x3).
+int DifferencesOutsideBorderBand(const cv::Mat& actual, const cv::Mat& expected) {
+  cv::Mat dilated, eroded, band, diff;
+  const cv::Mat kernel = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(3, 3));
+  cv::dilate(expected, dilated, kernel);
+  cv::erode(expected, eroded, kernel);
+  band = dilated != eroded;
+  diff = (actual != 0) != (expected != 0);
+  diff.setTo(0, band);
+  return cv::countNonZero(diff);
+}
+
+int Differences(const cv::Mat& a, const cv::Mat& b) {
+  return cv::countNonZero((a != 0) != (b != 0));
+}
+
+struct PlaneCase {
+  const char* name;
+  Eigen::Isometry3d T_cur_prev;
+  bool exact;  // pixel-exact expected (pure shift)
+};
+
+TEST(ProjectRegionsTest, PlanarRegionMatchesAnalyticProjection) {
+  const PinholeCamera camera = TestCamera();
+  const cv::Rect rect(200, 150, 100, 80);
+  const double depth_m = 2.0;
+  const cv::Mat depth(480, 640, CV_32F, cv::Scalar(depth_m));
+  FrameSegmentation previous;
+  previous.instances.push_back(Instance(1, 1, RectMask(rect)));
+
+  Eigen::Isometry3d rotation = Eigen::Isometry3d::Identity();
+  rotation.linear() =
+      Eigen::AngleAxisd(20.0 * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  Eigen::Isometry3d rotation_45 = Eigen::Isometry3d::Identity();
+  rotation_45.linear() =
+      Eigen::AngleAxisd(45.0 * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  Eigen::Isometry3d general = Translation(0.05, -0.03, -0.4);
+  general.linear() = Eigen::AngleAxisd(0.05, Eigen::Vector3d(0.3, 1, 0.2).normalized())
+                         .toRotationMatrix();
+  const PlaneCase cases[] = {
+      // Sideways by 25.3 px at 2 m (fx = 500): every pixel shifts by round(25.3) = 25.
+      {"translation_x", Translation(25.3 * depth_m / 500.0, 0, 0), true},
+      {"translation_xy", Translation(-40.2 * depth_m / 500.0, 12.7 * depth_m / 500.0, 0),
+       true},
+      {"rotation_optical_axis_20deg", rotation, false},
+      {"rotation_optical_axis_45deg", rotation_45, false},
+      // Closer by 0.5 m: magnified 2 / 1.5 = 1.33.
+      {"closer_x1.33", Translation(0, 0, -0.5), false},
+      // Closer by 1 m: magnified 2x; naive forward projection leaves every other row
+      // and column empty.
+      {"closer_x2", Translation(0, 0, -1.0), false},
+      {"general", general, false},
+  };
+  const RefinerOptions options;
+  for (const PlaneCase& c : cases) {
+    SCOPED_TRACE(c.name);
+    const std::vector<ProjectedRegion> projected =
+        ProjectRegions(options, camera, previous, depth, c.T_cur_prev);
+    ASSERT_EQ(projected.size(), 1u);
+    const cv::Mat expected = ExpectedProjection(camera, rect, depth_m, c.T_cur_prev);
+    ASSERT_GT(cv::countNonZero(expected), 0);
+    if (c.exact) {
+      EXPECT_EQ(Differences(projected[0].mask, expected), 0);
+    }
+    EXPECT_EQ(DifferencesOutsideBorderBand(projected[0].mask, expected), 0);
+    EXPECT_EQ(projected[0].area_px, cv::countNonZero(projected[0].mask));
+    EXPECT_EQ(projected[0].bbox, cv::boundingRect(projected[0].mask));
+    // Hole-free: the mask's filled outer contour adds no pixel.
+    std::vector<std::vector<cv::Point>> contours;
+    cv::Mat copy = projected[0].mask.clone();
+    cv::findContours(copy, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE);
+    cv::Mat filled(480, 640, CV_8U, cv::Scalar(0));
+    cv::drawContours(filled, contours, -1, cv::Scalar(1), cv::FILLED);
+    EXPECT_EQ(cv::countNonZero(filled), projected[0].area_px);
+    EXPECT_EQ(contours.size(), 1u);
+  }
+}
+
+// The checks above catch holes: without footprints and closing, a 2x magnification
+// leaves every other row and column empty.
+TEST(ProjectRegionsTest, NaiveForwardProjectionWouldLeaveHoles) {
+  const PinholeCamera camera = TestCamera();
+  const cv::Rect rect(200, 150, 100, 80);
+  const cv::Mat depth(480, 640, CV_32F, cv::Scalar(2.0));
+  FrameSegmentation previous;
+  previous.instances.push_back(Instance(1, 1, RectMask(rect)));
+  RefinerOptions naive;
+  naive.splat_footprint_scale = 0.5;
+  naive.hole_fill_iterations = 0;
+  const Eigen::Isometry3d T = Translation(0, 0, -1.0);
+  const cv::Mat expected = ExpectedProjection(camera, rect, 2.0, T);
+  EXPECT_GT(DifferencesOutsideBorderBand(
+                ProjectRegions(naive, camera, previous, depth, T)[0].mask, expected),
+            1000);
+}
+
+TEST(ProjectRegionsTest, FrontRegionWinsTheOverlap) {
+  const PinholeCamera camera = TestCamera();
+  // Far region A (3 m) left of near region B (1 m), side by side in frame t-1.
+  const cv::Rect rect_far(100, 100, 150, 200), rect_near(250, 150, 100, 100);
+  cv::Mat depth(480, 640, CV_32F, cv::Scalar(0));
+  depth(rect_far).setTo(3.0);
+  depth(rect_near).setTo(1.0);
+  FrameSegmentation previous;
+  previous.instances.push_back(Instance(1, 1, RectMask(rect_far)));
+  previous.instances.push_back(Instance(2, 1, RectMask(rect_near)));
+  // Camera moves right: near B shifts left by 100 px, far A by 33.3 px, B covers A.
+  const Eigen::Isometry3d T_cur_prev = Translation(-0.2, 0, 0);
+  for (int order = 0; order < 2; ++order) {
+    SCOPED_TRACE(order);
+    FrameSegmentation prev = previous;
+    if (order == 1) std::swap(prev.instances[0], prev.instances[1]);
+    const std::vector<ProjectedRegion> projected =
+        ProjectRegions(RefinerOptions(), camera, prev, depth, T_cur_prev);
+    const cv::Mat& far = projected[order == 0 ? 0 : 1].mask;
+    const cv::Mat& near = projected[order == 0 ? 1 : 0].mask;
+    const cv::Mat expected_near = RectMask(cv::Rect(150, 150, 100, 100));
+    cv::Mat expected_far = RectMask(cv::Rect(67, 100, 150, 200));
+    expected_far.setTo(0, expected_near);
+    EXPECT_EQ(DifferencesOutsideBorderBand(near, expected_near), 0);
+    EXPECT_EQ(DifferencesOutsideBorderBand(far, expected_far), 0);
+    EXPECT_EQ(cv::countNonZero(near & far), 0);
+  }
+}
+
+TEST(ProjectRegionsTest, MissingDepthIsFilledFromTheMedianOrSkipped) {
+  const PinholeCamera camera = TestCamera();
+  const cv::Rect rect(200, 150, 100, 80);
+  cv::Mat depth(480, 640, CV_32F, cv::Scalar(2.0));
+  depth(cv::Rect(230, 170, 30, 30)).setTo(0);  // a dropout inside the region
+  FrameSegmentation previous;
+  previous.instances.push_back(Instance(1, 1, RectMask(rect)));
+  const Eigen::Isometry3d T = Translation(0.1, 0, 0);  // 25 px
+  const cv::Mat expected = RectMask(rect + cv::Point(25, 0));
+  RefinerOptions options;
+  EXPECT_EQ(Differences(ProjectRegions(options, camera, previous, depth, T)[0].mask,
+                        expected), 0);
+  options.fill_missing_depth_with_median = false;
+  EXPECT_EQ(ProjectRegions(options, camera, previous, depth, T)[0].area_px,
+            100 * 80 - 30 * 30);
+}
+
+// Scene for the refiner tests: three previous regions at 2 m, identity camera motion.
+struct Scene {
+  PinholeCamera camera = TestCamera();
+  cv::Mat depth = cv::Mat(480, 640, CV_32F, cv::Scalar(2.0));
+  cv::Rect person_a{60, 100, 80, 200};
+  cv::Rect chair{250, 200, 120, 100};
+  cv::Rect person_b{450, 80, 90, 250};
+  FrameSegmentation previous;
+  Scene() {
+    previous.instances.push_back(Instance(5, 1, RectMask(person_a), 0.9f));
+    previous.instances.push_back(Instance(7, 62, RectMask(chair), 0.8f));
+    previous.instances.push_back(Instance(9, 1, RectMask(person_b), 0.7f));
+  }
+  RefinerInput Input(const FrameSegmentation& current) const {
+    RefinerInput in;
+    in.previous_refined = &previous;
+    in.previous_depth_m = depth;
+    in.current_initial = current;
+    in.camera = camera;
+    return in;
+  }
+};
+
+const InstanceMask* FindTrack(const FrameSegmentation& s, std::uint16_t id) {
+  for (const InstanceMask& m : s.instances) {
+    if (m.track_id == id) return &m;
+  }
+  return nullptr;
+}
+
+TEST(SegmentationRefinerTest, FirstFrameGivesFreshIds) {
+  SegmentationRefiner refiner;
+  RefinerInput in;
+  in.camera = TestCamera();
+  in.current_initial.instances.push_back(Instance(0, 1, RectMask(cv::Rect(0, 0, 10, 10))));
+  in.current_initial.instances.push_back(Instance(0, 3, RectMask(cv::Rect(20, 0, 10, 10))));
+  const RefinementResult r = refiner.Refine(in);
+  ASSERT_EQ(r.refined.instances.size(), 2u);
+  EXPECT_EQ(r.refined.instances[0].track_id, 1);
+  EXPECT_EQ(r.refined.instances[1].track_id, 2);
+  EXPECT_EQ(r.decisions[0].kind, RegionDecision::Kind::kNew);
+}
+
+TEST(SegmentationRefinerTest, RepairsKeepsCarriesIdsAndAddsMissed) {
+  const Scene scene;
+  FrameSegmentation current;
+  // Person A lost its right 40% (a cut-off side); the chair is right; person B missed;
+  // the detector numbers its instances freely (ids 1, 2 here are ignored).
+  current.instances.push_back(Instance(1, 62, RectMask(scene.chair), 0.85f));
+  current.instances.push_back(
+      Instance(2, 1, RectMask(cv::Rect(60, 100, 48, 200)), 0.95f));
+
+  RefinerOptions options;
+  options.repair_missing_parts = true;
+  SegmentationRefiner refiner(options);
+  const RefinementResult r = refiner.Refine(scene.Input(current));
+  SCOPED_TRACE(r.BriefReport());
+  ASSERT_EQ(r.refined.instances.size(), 3u);
+  // Chair kept, id carried over, current score kept.
+  EXPECT_EQ(r.refined.instances[0].track_id, 7);
+  EXPECT_EQ(r.decisions[0].kind, RegionDecision::Kind::kKept);
+  EXPECT_EQ(Differences(r.refined.instances[0].mask, RectMask(scene.chair)), 0);
+  EXPECT_FLOAT_EQ(r.refined.instances[0].score, 0.85f);
+  // Person A repaired to the projection.
+  EXPECT_EQ(r.refined.instances[1].track_id, 5);
+  EXPECT_EQ(r.decisions[1].kind, RegionDecision::Kind::kReplaced);
+  EXPECT_EQ(Differences(r.refined.instances[1].mask, RectMask(scene.person_a)), 0);
+  // Person B added from the projection: 3 regions at t-1 > 2 at t.
+  EXPECT_EQ(r.refined.instances[2].track_id, 9);
+  EXPECT_EQ(r.refined.instances[2].category_id, 1);
+  EXPECT_EQ(r.decisions[2].kind, RegionDecision::Kind::kAdded);
+  EXPECT_NEAR(r.refined.instances[2].score, 0.7f * options.added_score_decay, 1e-6);
+  EXPECT_EQ(Differences(r.refined.instances[2].mask, RectMask(scene.person_b)), 0);
+}
+
+TEST(SegmentationRefinerTest, PaperRuleShrinksOversizedAndKeepsCutOff) {
+  const Scene scene;
+  FrameSegmentation current;
+  // Person A oversized (30 px too wide), chair cut off, person B right, plus a new cup.
+  current.instances.push_back(Instance(0, 1, RectMask(cv::Rect(60, 100, 110, 200))));
+  current.instances.push_back(Instance(0, 62, RectMask(cv::Rect(250, 200, 80, 100))));
+  current.instances.push_back(Instance(0, 1, RectMask(scene.person_b)));
+  current.instances.push_back(Instance(0, 47, RectMask(cv::Rect(10, 400, 30, 30))));
+  SegmentationRefiner refiner;  // defaults: the paper's rule
+  const RefinementResult r = refiner.Refine(scene.Input(current));
+  SCOPED_TRACE(r.BriefReport());
+  ASSERT_EQ(r.refined.instances.size(), 4u);
+  EXPECT_EQ(r.decisions[0].kind, RegionDecision::Kind::kReplaced);
+  EXPECT_EQ(r.refined.instances[0].track_id, 5);
+  EXPECT_EQ(Differences(r.refined.instances[0].mask, RectMask(scene.person_a)), 0);
+  EXPECT_EQ(r.decisions[1].kind, RegionDecision::Kind::kKept);
+  EXPECT_EQ(r.refined.instances[1].track_id, 7);
+  EXPECT_EQ(r.decisions[2].kind, RegionDecision::Kind::kKept);
+  EXPECT_EQ(r.refined.instances[2].track_id, 9);
+  EXPECT_EQ(r.decisions[3].kind, RegionDecision::Kind::kNew);
+  EXPECT_EQ(r.refined.instances[3].track_id, 10);  // above every previous id
+}
+
+TEST(SegmentationRefinerTest, NoAddWhenCountsAreEqualAndCategoryMustMatch) {
+  const Scene scene;
+  FrameSegmentation current;
+  // Person B missed, but a dog appears where the chair was: 3 = 3 regions, no add; the
+  // dog does not take the chair's id.
+  current.instances.push_back(Instance(0, 1, RectMask(scene.person_a)));
+  current.instances.push_back(Instance(0, 18, RectMask(scene.chair)));
+  current.instances.push_back(Instance(0, 1, RectMask(cv::Rect(300, 20, 40, 40))));
+  SegmentationRefiner refiner;
+  const RefinementResult r = refiner.Refine(scene.Input(current));
+  SCOPED_TRACE(r.BriefReport());
+  ASSERT_EQ(r.refined.instances.size(), 3u);
+  EXPECT_EQ(r.refined.instances[0].track_id, 5);
+  EXPECT_EQ(r.decisions[1].kind, RegionDecision::Kind::kNew);
+  EXPECT_NE(r.refined.instances[1].track_id, 7);
+  EXPECT_EQ(FindTrack(r.refined, 9), nullptr);
+  EXPECT_EQ(r.decisions.back().kind, RegionDecision::Kind::kDropped);
+}
+
+TEST(SegmentationRefinerTest, PerfectInputWithIdentityMotionIsUnchanged) {
+  // Several regions on a slanted, noisy-free depth with dropouts, camera still.
+  const PinholeCamera camera = TestCamera();
+  cv::Mat depth(480, 640, CV_32F);
+  for (int y = 0; y < 480; ++y) {
+    for (int x = 0; x < 640; ++x) depth.at<float>(y, x) = 1.5f + 0.002f * x + 0.001f * y;
+  }
+  depth(cv::Rect(100, 100, 10, 10)).setTo(0);
+  FrameSegmentation previous;
+  cv::Mat ellipse(480, 640, CV_8U, cv::Scalar(0));
+  cv::ellipse(ellipse, cv::Point(400, 300), cv::Size(60, 40), 30, 0, 360, cv::Scalar(1),
+              cv::FILLED);
+  previous.instances.push_back(Instance(3, 1, RectMask(cv::Rect(90, 90, 60, 90))));
+  previous.instances.push_back(Instance(4, 62, ellipse));
+  previous.instances.push_back(Instance(8, 44, RectMask(cv::Rect(500, 20, 3, 300))));
+  FrameSegmentation current = previous;
+  for (InstanceMask& m : current.instances) m.track_id = 0;
+  RefinerInput in;
+  in.previous_refined = &previous;
+  in.previous_depth_m = depth;
+  in.current_initial = current;
+  in.camera = camera;
+  const Eigen::Isometry3d pose = Translation(1, 2, 3);
+  in.T_wc_previous_fine = pose;
+  in.T_wc_current_coarse = pose;
+  for (bool repair : {false, true}) {
+    RefinerOptions options;
+    options.repair_missing_parts = repair;
+    SegmentationRefiner refiner(options);
+    const RefinementResult r = refiner.Refine(in);
+    SCOPED_TRACE(r.BriefReport());
+    ASSERT_EQ(r.refined.instances.size(), previous.instances.size());
+    for (size_t i = 0; i < previous.instances.size(); ++i) {
+      EXPECT_EQ(r.refined.instances[i].track_id, previous.instances[i].track_id);
+      EXPECT_EQ(r.decisions[i].kind, RegionDecision::Kind::kKept);
+      EXPECT_EQ(Differences(r.refined.instances[i].mask, previous.instances[i].mask), 0);
+    }
+  }
+}
+
+TEST(SegmentationRefinerTest, InstanceOwnMotionMovesOnlyThatRegion) {
+  const Scene scene;
+  // The chair (id 7) moved 0.1 m right at 2 m depth: 25 px; the camera is still.
+  RefinerInput in = scene.Input(FrameSegmentation());
+  in.instance_motion_prev[7] = Translation(0.1, 0, 0);
+  const std::vector<ProjectedRegion> projected =
+      ProjectRegions(RefinerOptions(), scene.camera, scene.previous, scene.depth,
+                     Eigen::Isometry3d::Identity(), in.instance_motion_prev);
+  EXPECT_EQ(Differences(projected[0].mask, RectMask(scene.person_a)), 0);
+  EXPECT_EQ(Differences(projected[1].mask, RectMask(scene.chair + cv::Point(25, 0))), 0);
+  EXPECT_EQ(Differences(projected[2].mask, RectMask(scene.person_b)), 0);
+
+  // Through Refine: the moved chair is matched and keeps its id.
+  FrameSegmentation current;
+  current.instances.push_back(Instance(0, 1, RectMask(scene.person_a)));
+  current.instances.push_back(Instance(0, 62, RectMask(scene.chair + cv::Point(25, 0))));
+  current.instances.push_back(Instance(0, 1, RectMask(scene.person_b)));
+  in.current_initial = current;
+  SegmentationRefiner refiner;
+  const RefinementResult r = refiner.Refine(in);
+  EXPECT_EQ(r.refined.instances[1].track_id, 7);
+  EXPECT_EQ(r.decisions[1].kind, RegionDecision::Kind::kKept);
+  EXPECT_DOUBLE_EQ(r.decisions[1].ratio_current, 1.0);
+}
+
+TEST(RefinerOptionsTest, IsValidReportsEachError) {
+  std::string error;
+  EXPECT_TRUE(RefinerOptions().IsValid(&error));
+  auto expect_invalid = [](RefinerOptions o, const std::string& field) {
+    std::string message;
+    EXPECT_FALSE(o.IsValid(&message)) << field;
+    EXPECT_NE(message.find(field), std::string::npos) << message;
+    EXPECT_FALSE(o.IsValid(nullptr));
+  };
+  RefinerOptions o;
+  o.w_barycenter = -1;
+  expect_invalid(o, "w_barycenter");
+  o = {};
+  o.w_shape = NAN;
+  expect_invalid(o, "w_shape");
+  o = {};
+  o.w_shape = 0;
+  o.w_barycenter = 0;
+  expect_invalid(o, "both");
+  o = {};
+  o.max_match_cost = 0;
+  expect_invalid(o, "max_match_cost");
+  o = {};
+  o.splat_footprint_scale = 0.2;
+  expect_invalid(o, "splat_footprint_scale");
+  o = {};
+  o.hole_fill_iterations = -1;
+  expect_invalid(o, "hole_fill_iterations");
+  o = {};
+  o.depth_tolerance = 1;
+  expect_invalid(o, "depth_tolerance");
+  o = {};
+  o.min_depth_m = 0;
+  expect_invalid(o, "min_depth_m");
+  o = {};
+  o.min_projected_area_px = -1;
+  expect_invalid(o, "min_projected_area_px");
+  o = {};
+  o.repair_min_current_inside = 1.5;
+  expect_invalid(o, "repair_min_current_inside");
+  o = {};
+  o.repair_max_projected_covered = 0;
+  expect_invalid(o, "repair_max_projected_covered");
+  o = {};
+  o.added_score_decay = 0;
+  expect_invalid(o, "added_score_decay");
+  o = {};
+  o.min_added_score = 2;
+  expect_invalid(o, "min_added_score");
+  RefinerOptions bad;
+  bad.max_match_cost = -1;
+  EXPECT_THROW(SegmentationRefiner{bad}, Error);
+}
+
+TEST(SegmentationRefinerTest, RejectsWrongImageSizes) {
+  const Scene scene;
+  RefinerInput in = scene.Input(FrameSegmentation());
+  in.previous_depth_m = cv::Mat(10, 10, CV_32F, cv::Scalar(1));
+  SegmentationRefiner refiner;
+  EXPECT_THROW(refiner.Refine(in), Error);
+}
+
+}  // namespace
+}  // namespace segslam::seg
