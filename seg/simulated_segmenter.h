@@ -1,0 +1,215 @@
+// A simulated instance segmenter for synthetic sequences: it starts from the ground-truth
+// instance masks and degrades them with the error modes that real networks (FCIS, Mask
+// R-CNN) show and that the paper's refinement (section III.D) exists to repair:
+//   - missed instances, more often when small, truncated at the image border, occluded
+//     or moving (motion blur), and flickering from frame to frame;
+//   - missing parts: holes and a cut-off side;
+//   - oversized regions that bleed into the background or a neighbour;
+//   - jittered boundaries;
+//   - class confusions among similar COCO classes (car/truck/bus, cup/bottle, ...);
+//   - false positives, mostly low-scored;
+// with scores that grow with the produced mask's quality (its IoU with the ground truth),
+// so that AP ranks detections meaningfully.
+//
+// Determinism: every random draw comes from a generator seeded by (seed, frame index,
+// ground-truth instance id, error mode), never from call order: a frame gives the same
+// result whatever frames were segmented before. Each instance also has a persistent
+// difficulty (seeded by (seed, instance id) only), so some instances are hard throughout.
+//
+// Images: ground-truth ids CV_16U (0 = background); output masks CV_8U 0/1 (segmentation.h).
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "core/instances.h"
+#include "core/tum_dataset.h"
+#include "seg/segmenter.h"
+
+namespace segslam::seg {
+
+// Every error rate and magnitude of the simulated segmenter. Probabilities are per
+// instance and frame unless said otherwise. `strength` scales all of them (see
+// Effective()); the defaults are the "fcis-like" preset.
+struct SimulatedSegmenterOptions {
+  // Scales every probability and magnitude below: 0 = ground truth, 1 = as written,
+  // > 1 worse (probabilities are clamped to 1). Range [0, 10].
+  double strength = 1.0;
+
+  // --- Missed instances (false negatives) ---
+  // Probability of missing any instance, [0, 1].
+  double miss_prob = 0.02;
+  // Extra miss probability of an instance of area -> 0, falling linearly to 0 at
+  // `small_area_fraction` of the image area, [0, 1].
+  double miss_small_prob = 0.05;
+  // Area (share of the image's pixels) below which an instance counts as small, [0, 1].
+  double small_area_fraction = 0.002;
+  // Instances with fewer visible pixels than this are never detected, pixels, >= 0.
+  int min_area_px = 3;
+  // Extra miss probability of an instance fully truncated by the image border
+  // (border pixels >= sqrt(area)); scales linearly with the truncation, [0, 1].
+  double miss_truncated_prob = 0.5;
+  // Extra miss probability of a fully occluded instance; scales linearly with
+  // 1 - visible share (visible pixels over their maximum within +-`occlusion_window`
+  // frames, from tracks.json), [0, 1].
+  double miss_occluded_prob = 0.35;
+  // Frames on each side over which the visible maximum is taken, >= 0. Short, so that
+  // objects growing as the camera approaches do not count as occluded.
+  int occlusion_window = 5;
+  // Extra miss probability of a moving instance (tracks.json "moving"), [0, 1].
+  double miss_moving_prob = 0.05;
+  // Standard deviation of an instance's persistent difficulty, added to the logit of its
+  // miss probability and scaling its shape errors by exp(difficulty / 2), >= 0.
+  double difficulty_sd = 0.3;
+
+  // --- Missing parts ---
+  // Probability that holes are punched into a detected instance, [0, 1].
+  double hole_prob = 0.15;
+  // Largest number of holes (uniform in 1..max), >= 1.
+  int hole_count_max = 3;
+  // Hole radius as a share of sqrt(instance area), uniform up to this, [0, 1].
+  double hole_radius_fraction = 0.18;
+  // Probability that one side of the instance is cut off, [0, 1].
+  double cut_prob = 0.12;
+  // Largest share of the bounding box (along a random axis, from a random side) that a
+  // cut removes, [0, 1).
+  double cut_fraction_max = 0.35;
+
+  // --- Oversized regions ---
+  // Probability that the region bleeds outward (dilated, into background or neighbours), [0, 1].
+  double bleed_prob = 0.25;
+  // Largest bleed width as a share of sqrt(instance area), uniform up to this, [0, 1].
+  double bleed_fraction_max = 0.1;
+  // Probability that a bleeding region also grows a blob on one side (bleeding into the
+  // background or a neighbour over a longer stretch), [0, 1].
+  double bleed_blob_prob = 0.3;
+
+  // --- Boundaries ---
+  // Amplitude of the smooth random boundary displacement, as a share of sqrt(instance
+  // area) (mask heads work at a fixed resolution per box, so their boundary error grows
+  // with the object), [0, 1] ...
+  double boundary_jitter_fraction = 0.03;
+  // ... and at most this many pixels, >= 0.
+  double boundary_jitter_px = 12.0;
+  // Spatial scale of the boundary jitter (noise grid spacing) as a share of sqrt(instance
+  // area), at least 2 pixels, (0, 10].
+  double boundary_jitter_scale_fraction = 0.3;
+
+  // --- Classes ---
+  // Probability of reporting a similar COCO class instead of the true one (only for
+  // classes with look-alikes: car/truck/bus, bicycle/motorcycle, cup/bottle/wine glass/
+  // vase/bowl, chair/couch/bench, tv/laptop, cat/dog, ...) that is in view in the same
+  // frame (a network mistakes a car for the truck parked nearby; a confusion into a class
+  // absent from the scene would only add a zero class to mIoU), [0, 1]. The rate is for a
+  // look-alike with at least as many pixels in view; towards a rarer look-alike it falls
+  // with 2 * other / (own + other) pixels (networks lean towards the common class).
+  double confusion_prob = 0.03;
+  // (The wrong class is drawn per instance, not per frame: confused again with the same
+  // look-alikes in view, an instance is confused the same way.)
+
+  // --- False positives ---
+  // Expected false positives per frame (Poisson), >= 0. Each is a jittered ellipse on the
+  // background (no ground-truth overlap) looking like an object in view: the class of a
+  // random ground-truth instance of the frame and 0.3 to 2 times its area (a random class
+  // of the sequence if the frame has none).
+  double false_positives_per_frame = 2.5;
+  // False-positive area range (clamps the area above), share of the image's pixels,
+  // 0 < min <= max <= 1.
+  double false_positive_area_min = 0.0002;
+  double false_positive_area_max = 0.15;
+
+  // --- Scores ---
+  // A true detection scores clamp(1 - score_iou_weight * (1 - IoU) + N(0, score_noise_sd),
+  // 0.01, 1), IoU of the produced mask with its ground-truth instance, times
+  // `confusion_score_factor` if its class is wrong. Clean output scores 1.
+  double score_iou_weight = 1.0;          // Not scaled by strength, [0, 5].
+  double score_noise_sd = 0.1;            // >= 0.
+  double confusion_score_factor = 0.75;   // (0, 1]; strength moves it away from 1.
+  // False positives score uniformly in [0.01, false_positive_score_max], [0.01, 1];
+  // not scaled by strength.
+  double false_positive_score_max = 0.6;
+
+  // The named presets: "clean" (ground truth, every error off), "fcis-like" (the
+  // defaults: calibrated so that the shipped city and office scenarios score like FCIS
+  // in the paper, mAP 0.63-0.67 and mIoU 0.56-0.65), "mask-rcnn-like" (fewer and smaller
+  // errors), "poor" (a weak network). Throws segslam::Error listing them on another name.
+  static SimulatedSegmenterOptions Preset(const std::string& name);
+  static std::vector<std::string> PresetNames();
+
+  // The options with `strength` applied: rates and magnitudes multiplied by it
+  // (probabilities clamped to 1), strength set to 1. Strength 0 gives clean output.
+  SimulatedSegmenterOptions Effective() const;
+
+  // False (and a message naming the field and its range) if any field is out of range.
+  bool IsValid(std::string* error) const;
+};
+
+// What the simulator knows of a ground-truth instance in a frame besides its mask.
+struct SimulatedInstanceContext {
+  double visible_share = 1.0;  // Visible pixels over their recent maximum, [0, 1].
+  bool moving = false;         // The object moves in this frame.
+};
+
+// A simulated segmentation and, for debugging and tests, where each output came from.
+struct SimulatedFrame {
+  FrameSegmentation segmentation;
+  // Per output instance (same order): its ground-truth instance id, 0 for a false positive.
+  std::vector<std::uint16_t> gt_ids;
+};
+
+// Degrades the ground truth `gt_ids` (CV_16U, 0 = background, ids from `table`) of the
+// frame `frame_index` as `options` say (strength applied here). Instances missing from
+// `context` get the default context. Deterministic in (options, seed, frame_index, the
+// inputs). Output track ids are a seeded per-frame permutation of 1..N (not the GT ids).
+// Throws segslam::Error on invalid options, a non-CV_16U image or an id not in `table`.
+SimulatedFrame SimulateSegmentation(const SimulatedSegmenterOptions& options, std::uint64_t seed,
+                                    int frame_index, const cv::Mat& gt_ids,
+                                    const InstanceTable& table,
+                                    const std::map<std::uint16_t, SimulatedInstanceContext>& context);
+
+// The simulated segmenter over a generated sequence directory (one pass of a segslam
+// dataset): reads <dir>/instances.json, <dir>/tracks.json (optional: without it nothing
+// counts as occluded or moving) and, per frame, <dir>/masks/<stem of the rgb file>.png.
+// Not copyable.
+class SimulatedSegmenter : public Segmenter {
+ public:
+  // Opens the sequence (TumSequence::Open) and reads its tables. Throws segslam::Error on
+  // invalid options (naming the field), a missing masks/ folder or instances.json, or
+  // any reader's error.
+  SimulatedSegmenter(const std::filesystem::path& sequence_dir,
+                     const SimulatedSegmenterOptions& options, std::uint64_t seed,
+                     std::string preset_name = "fcis-like");
+  SimulatedSegmenter(const SimulatedSegmenter&) = delete;
+  SimulatedSegmenter& operator=(const SimulatedSegmenter&) = delete;
+
+  // Reads frame.index's ground-truth mask and degrades it. Throws segslam::Error naming
+  // the mask file if it is missing, not 16-bit, of another size than the frame, or holds
+  // an id not in instances.json, or if frame.index is out of range.
+  FrameSegmentation Segment(const RgbdFrame& frame) override;
+  // As Segment(), with the ground-truth id of every output instance.
+  SimulatedFrame SegmentWithTruth(const RgbdFrame& frame);
+
+  // "simulated:<preset>" plus "@<strength>" when the strength is not 1.
+  std::string name() const override;
+
+  const SimulatedSegmenterOptions& options() const { return options_; }
+  // The ground-truth mask file of frame i.
+  std::filesystem::path MaskPath(size_t i) const;
+
+ private:
+  std::filesystem::path dir_;
+  SimulatedSegmenterOptions options_;
+  std::uint64_t seed_;
+  std::string preset_name_;
+  TumSequence sequence_;
+  InstanceTable table_;
+  // Per instance id: (frame -> (visible pixels, moving)).
+  std::map<std::uint16_t, std::map<int, std::pair<int, bool>>> tracks_;
+};
+
+}  // namespace segslam::seg

@@ -1,0 +1,504 @@
+// Tests of seg/simulated_segmenter.h: clean equals ground truth, determinism whatever the
+// frame order, each error mode on its own, scores that follow quality, option checks.
+#include "seg/simulated_segmenter.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <numeric>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include "core/error.h"
+#include "core/image_io.h"
+#include "core/tracks.h"
+
+namespace segslam::seg {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kWidth = 160;
+constexpr int kHeight = 120;
+
+// Instances: 1 person (large), 2 car, 3 truck (as large as the car), 4 cup (small),
+// 5 car touching the left border.
+InstanceTable TestTable() {
+  InstanceTable table;
+  table.Add({1, 1, "", false});
+  table.Add({2, 3, "", false});
+  table.Add({3, 8, "", false});
+  table.Add({4, 47, "", false});
+  table.Add({5, 3, "", false});
+  return table;
+}
+
+cv::Mat TestIds(int shift = 0) {
+  cv::Mat ids(kHeight, kWidth, CV_16U, cv::Scalar(0));
+  cv::ellipse(ids, cv::Point(40 + shift, 60), cv::Size(14, 30), 0, 0, 360, 1, cv::FILLED);
+  cv::rectangle(ids, cv::Rect(70 + shift, 70, 30, 18), 2, cv::FILLED);
+  cv::rectangle(ids, cv::Rect(105 + shift, 66, 30, 18), 3, cv::FILLED);
+  cv::circle(ids, cv::Point(120, 20), 4, 4, cv::FILLED);
+  cv::rectangle(ids, cv::Rect(0, 95, 18, 15), 5, cv::FILLED);
+  return ids;
+}
+
+SimulatedSegmenterOptions Clean() { return SimulatedSegmenterOptions::Preset("clean"); }
+
+cv::Mat GtMask(const cv::Mat& ids, std::uint16_t id) {
+  cv::Mat m;
+  cv::compare(ids, id, m, cv::CMP_EQ);
+  return m / 255;
+}
+
+bool SameMask(const cv::Mat& a, const cv::Mat& b) {
+  return a.size() == b.size() && a.type() == b.type() && cv::countNonZero(a != b) == 0;
+}
+
+double Iou(const cv::Mat& a, const cv::Mat& b) {
+  const double inter = cv::countNonZero(a & b);
+  const double uni = cv::countNonZero(a | b);
+  return uni > 0 ? inter / uni : 0.0;
+}
+
+// Expects two simulated frames to be identical.
+void ExpectSameFrame(const SimulatedFrame& a, const SimulatedFrame& b) {
+  ASSERT_EQ(a.segmentation.instances.size(), b.segmentation.instances.size());
+  EXPECT_EQ(a.gt_ids, b.gt_ids);
+  for (size_t i = 0; i < a.segmentation.instances.size(); ++i) {
+    const InstanceMask& x = a.segmentation.instances[i];
+    const InstanceMask& y = b.segmentation.instances[i];
+    EXPECT_EQ(x.track_id, y.track_id);
+    EXPECT_EQ(x.category_id, y.category_id);
+    EXPECT_EQ(x.score, y.score);
+    EXPECT_TRUE(SameMask(x.mask, y.mask));
+  }
+}
+
+SimulatedFrame Simulate(const SimulatedSegmenterOptions& options, int frame, std::uint64_t seed = 7,
+                        const cv::Mat& ids = TestIds()) {
+  return SimulateSegmentation(options, seed, frame, ids, TestTable(), {});
+}
+
+TEST(SimulatedSegmenterTest, CleanPresetEqualsGroundTruth) {
+  const cv::Mat ids = TestIds();
+  const SimulatedFrame out = Simulate(Clean(), 0);
+  ASSERT_EQ(out.segmentation.instances.size(), 5u);
+  std::vector<std::uint16_t> seen = out.gt_ids;
+  std::sort(seen.begin(), seen.end());
+  EXPECT_EQ(seen, (std::vector<std::uint16_t>{1, 2, 3, 4, 5}));
+  const InstanceTable table = TestTable();
+  for (size_t i = 0; i < out.gt_ids.size(); ++i) {
+    const InstanceMask& m = out.segmentation.instances[i];
+    EXPECT_TRUE(SameMask(m.mask, GtMask(ids, out.gt_ids[i]))) << "instance " << out.gt_ids[i];
+    EXPECT_EQ(m.category_id, table.Find(out.gt_ids[i])->category_id);
+    EXPECT_EQ(m.score, 1.0f);
+    EXPECT_GE(m.track_id, 1);
+  }
+  // The id image of the output is the ground truth up to renumbering.
+  const cv::Mat out_ids = out.segmentation.ToIdImage(ids.size());
+  EXPECT_EQ(cv::countNonZero(out_ids), cv::countNonZero(ids));
+}
+
+TEST(SimulatedSegmenterTest, StrengthZeroEqualsClean) {
+  for (const std::string& name : SimulatedSegmenterOptions::PresetNames()) {
+    SimulatedSegmenterOptions options = SimulatedSegmenterOptions::Preset(name);
+    options.strength = 0;
+    for (int frame = 0; frame < 5; ++frame) {
+      SimulatedFrame a = Simulate(options, frame);
+      SimulatedFrame b = Simulate(Clean(), frame);
+      ExpectSameFrame(a, b);
+    }
+  }
+}
+
+TEST(SimulatedSegmenterTest, DeterministicInSeedAndFrame) {
+  const SimulatedSegmenterOptions options;  // fcis-like
+  ExpectSameFrame(Simulate(options, 3, 11), Simulate(options, 3, 11));
+  // Another seed or frame gives another result (some mask or score differs).
+  auto differs = [](const SimulatedFrame& a, const SimulatedFrame& b) {
+    if (a.segmentation.instances.size() != b.segmentation.instances.size()) return true;
+    for (size_t i = 0; i < a.segmentation.instances.size(); ++i) {
+      if (a.segmentation.instances[i].score != b.segmentation.instances[i].score) return true;
+    }
+    return false;
+  };
+  EXPECT_TRUE(differs(Simulate(options, 3, 11), Simulate(options, 3, 12)));
+  EXPECT_TRUE(differs(Simulate(options, 3, 11), Simulate(options, 4, 11)));
+}
+
+TEST(SimulatedSegmenterTest, MissAlwaysRemovesEverything) {
+  SimulatedSegmenterOptions options = Clean();
+  options.miss_prob = 1;
+  EXPECT_TRUE(Simulate(options, 0).segmentation.instances.empty());
+}
+
+TEST(SimulatedSegmenterTest, SmallInstancesAreMissedMoreOften) {
+  SimulatedSegmenterOptions options = Clean();
+  options.miss_small_prob = 0.8;
+  options.small_area_fraction = 0.05;  // 960 px: the cup (~50 px) is small, the person not
+  int cup = 0, person = 0;
+  for (int frame = 0; frame < 200; ++frame) {
+    const SimulatedFrame out = Simulate(options, frame);
+    cup += std::count(out.gt_ids.begin(), out.gt_ids.end(), 4);
+    person += std::count(out.gt_ids.begin(), out.gt_ids.end(), 1);
+  }
+  EXPECT_EQ(person, 200);
+  EXPECT_LT(cup, 100);
+}
+
+TEST(SimulatedSegmenterTest, TruncatedOccludedAndMovingInstancesAreMissedMoreOften) {
+  SimulatedSegmenterOptions truncated = Clean();
+  truncated.miss_truncated_prob = 0.9;
+  SimulatedSegmenterOptions occluded = Clean();
+  occluded.miss_occluded_prob = 0.9;
+  SimulatedSegmenterOptions moving = Clean();
+  moving.miss_moving_prob = 0.9;
+  const std::map<std::uint16_t, SimulatedInstanceContext> context = {
+      {2, {0.1, false}}, {3, {1.0, true}}};
+  int border_car = 0, inner_car = 0, occluded_car = 0, moving_truck = 0;
+  for (int frame = 0; frame < 100; ++frame) {
+    const auto a = SimulateSegmentation(truncated, 1, frame, TestIds(), TestTable(), {}).gt_ids;
+    border_car += std::count(a.begin(), a.end(), 5);
+    inner_car += std::count(a.begin(), a.end(), 2);
+    const auto b = SimulateSegmentation(occluded, 1, frame, TestIds(), TestTable(), context).gt_ids;
+    occluded_car += std::count(b.begin(), b.end(), 2);
+    EXPECT_EQ(std::count(b.begin(), b.end(), 3), 1);
+    const auto c = SimulateSegmentation(moving, 1, frame, TestIds(), TestTable(), context).gt_ids;
+    moving_truck += std::count(c.begin(), c.end(), 3);
+    EXPECT_EQ(std::count(c.begin(), c.end(), 2), 1);
+  }
+  EXPECT_EQ(inner_car, 100);
+  EXPECT_LT(border_car, 50);
+  EXPECT_LT(occluded_car, 50);
+  EXPECT_LT(moving_truck, 50);
+}
+
+TEST(SimulatedSegmenterTest, MissingPartsOnlyRemovePixels) {
+  const cv::Mat ids = TestIds();
+  for (const char* mode : {"holes", "cut"}) {
+    SimulatedSegmenterOptions options = Clean();
+    if (std::string(mode) == "holes") options.hole_prob = 1;
+    if (std::string(mode) == "cut") options.cut_prob = 1;
+    int removed = 0;
+    for (int frame = 0; frame < 10; ++frame) {
+      const SimulatedFrame out = Simulate(options, frame);
+      for (size_t i = 0; i < out.gt_ids.size(); ++i) {
+        const cv::Mat gt = GtMask(ids, out.gt_ids[i]);
+        const cv::Mat& m = out.segmentation.instances[i].mask;
+        EXPECT_EQ(cv::countNonZero(m & ~gt & 1), 0) << mode << ": pixels added";
+        removed += cv::countNonZero(gt) - cv::countNonZero(m);
+      }
+    }
+    EXPECT_GT(removed, 100) << mode;
+  }
+}
+
+TEST(SimulatedSegmenterTest, BleedingAddsPixelsOutsideTheInstance) {
+  const cv::Mat ids = TestIds();
+  SimulatedSegmenterOptions options = Clean();
+  options.bleed_prob = 1;
+  options.bleed_fraction_max = 0.3;
+  int added = 0, into_neighbour = 0;
+  for (int frame = 0; frame < 10; ++frame) {
+    const SimulatedFrame out = Simulate(options, frame);
+    ASSERT_EQ(out.gt_ids.size(), 5u);
+    for (size_t i = 0; i < out.gt_ids.size(); ++i) {
+      const cv::Mat gt = GtMask(ids, out.gt_ids[i]);
+      const cv::Mat& m = out.segmentation.instances[i].mask;
+      EXPECT_EQ(cv::countNonZero(gt & ~m & 1), 0) << "bleeding removed pixels";
+      added += cv::countNonZero(m) - cv::countNonZero(gt);
+      cv::Mat others;
+      cv::compare(ids, 0, others, cv::CMP_NE);
+      into_neighbour += cv::countNonZero(m & (others / 255) & ~gt & 1);
+    }
+  }
+  EXPECT_GT(added, 500);
+  EXPECT_GT(into_neighbour, 0);  // car 2 and truck 3 are 5 px apart
+}
+
+TEST(SimulatedSegmenterTest, JitterMovesTheBoundaryBothWays) {
+  const cv::Mat ids = TestIds();
+  SimulatedSegmenterOptions options = Clean();
+  options.boundary_jitter_fraction = 0.1;
+  options.boundary_jitter_px = 10;
+  const SimulatedFrame out = Simulate(options, 0);
+  int added = 0, removed = 0;
+  for (size_t i = 0; i < out.gt_ids.size(); ++i) {
+    const cv::Mat gt = GtMask(ids, out.gt_ids[i]);
+    const cv::Mat& m = out.segmentation.instances[i].mask;
+    added += cv::countNonZero(m & ~gt & 1);
+    removed += cv::countNonZero(gt & ~m & 1);
+    if (out.gt_ids[i] != 4) {
+      EXPECT_GT(Iou(m, gt), 0.6) << "instance " << out.gt_ids[i];
+    }
+  }
+  EXPECT_GT(added, 0);
+  EXPECT_GT(removed, 0);
+}
+
+TEST(SimulatedSegmenterTest, ConfusionPicksALookAlikeInView) {
+  SimulatedSegmenterOptions options = Clean();
+  options.confusion_prob = 1;
+  options.confusion_score_factor = 0.75;
+  const SimulatedFrame out = Simulate(options, 0);
+  for (size_t i = 0; i < out.gt_ids.size(); ++i) {
+    const int category = out.segmentation.instances[i].category_id;
+    switch (out.gt_ids[i]) {
+      case 1: EXPECT_EQ(category, 1); break;   // person has no look-alike
+      case 4: EXPECT_EQ(category, 47); break;  // no bottle or bowl in view
+      case 3: EXPECT_EQ(category, 3); break;   // truck -> car
+      default: break;  // cars (more car pixels than truck pixels) seldom become trucks
+    }
+  }
+  // Confused detections score lower than the clean 1.
+  for (size_t i = 0; i < out.gt_ids.size(); ++i) {
+    if (out.gt_ids[i] == 3) {
+      EXPECT_LT(out.segmentation.instances[i].score, 1.0f);
+    }
+  }
+}
+
+TEST(SimulatedSegmenterTest, FalsePositivesDoNotOverlapGroundTruthAndScoreLow) {
+  const cv::Mat ids = TestIds();
+  SimulatedSegmenterOptions options = Clean();
+  options.false_positives_per_frame = 3;
+  int false_positives = 0;
+  cv::Mat foreground;
+  cv::compare(ids, 0, foreground, cv::CMP_NE);
+  for (int frame = 0; frame < 20; ++frame) {
+    const SimulatedFrame out = Simulate(options, frame);
+    for (size_t i = 0; i < out.gt_ids.size(); ++i) {
+      if (out.gt_ids[i] != 0) continue;
+      ++false_positives;
+      const InstanceMask& m = out.segmentation.instances[i];
+      EXPECT_EQ(cv::countNonZero(m.mask & foreground), 0);
+      EXPECT_LE(m.score, options.false_positive_score_max);
+      EXPECT_NE(TestTable().Find(1), nullptr);
+    }
+  }
+  EXPECT_GT(false_positives, 20);
+}
+
+TEST(SimulatedSegmenterTest, TrackIdsAreAPermutationNotGroundTruth) {
+  const SimulatedFrame out = Simulate(SimulatedSegmenterOptions(), 2);
+  std::vector<int> track_ids;
+  for (const auto& m : out.segmentation.instances) track_ids.push_back(m.track_id);
+  std::sort(track_ids.begin(), track_ids.end());
+  std::vector<int> expected(track_ids.size());
+  std::iota(expected.begin(), expected.end(), 1);
+  EXPECT_EQ(track_ids, expected);
+}
+
+// Spearman's rank correlation (no tie correction; scores are continuous).
+double Spearman(const std::vector<double>& x, const std::vector<double>& y) {
+  auto ranks = [](const std::vector<double>& v) {
+    std::vector<size_t> order(v.size());
+    std::iota(order.begin(), order.end(), 0);
+    std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return v[a] < v[b]; });
+    std::vector<double> r(v.size());
+    for (size_t i = 0; i < order.size(); ++i) r[order[i]] = static_cast<double>(i);
+    return r;
+  };
+  const std::vector<double> rx = ranks(x), ry = ranks(y);
+  const double n = static_cast<double>(x.size());
+  double d2 = 0;
+  for (size_t i = 0; i < rx.size(); ++i) d2 += (rx[i] - ry[i]) * (rx[i] - ry[i]);
+  return 1.0 - 6.0 * d2 / (n * (n * n - 1.0));
+}
+
+TEST(SimulatedSegmenterTest, ScoresCorrelateWithIou) {
+  const cv::Mat ids = TestIds();
+  SimulatedSegmenterOptions options;  // fcis-like, without class confusions
+  options.confusion_prob = 0;
+  std::vector<double> scores, ious;
+  for (int frame = 0; frame < 80; ++frame) {
+    const SimulatedFrame out = Simulate(options, frame);
+    for (size_t i = 0; i < out.gt_ids.size(); ++i) {
+      const InstanceMask& m = out.segmentation.instances[i];
+      scores.push_back(m.score);
+      ious.push_back(out.gt_ids[i] == 0 ? 0.0 : Iou(m.mask, GtMask(ids, out.gt_ids[i])));
+    }
+  }
+  ASSERT_GT(scores.size(), 100u);
+  const double rho = Spearman(scores, ious);
+  EXPECT_GT(rho, 0.5);
+}
+
+TEST(SimulatedSegmenterTest, StrengthMakesThingsWorse) {
+  const cv::Mat ids = TestIds();
+  auto mean_iou = [&](double strength) {
+    SimulatedSegmenterOptions options;
+    options.strength = strength;
+    options.false_positives_per_frame = 0;
+    double sum = 0;
+    int n = 0;
+    for (int frame = 0; frame < 40; ++frame) {
+      const SimulatedFrame out = Simulate(options, frame);
+      for (std::uint16_t id : {1, 2, 3, 4, 5}) {
+        double best = 0;
+        for (size_t i = 0; i < out.gt_ids.size(); ++i) {
+          if (out.gt_ids[i] == id) best = Iou(out.segmentation.instances[i].mask, GtMask(ids, id));
+        }
+        sum += best;
+        ++n;
+      }
+    }
+    return sum / n;
+  };
+  const double clean = mean_iou(0), preset = mean_iou(1), poor = mean_iou(2.5);
+  EXPECT_EQ(clean, 1.0);
+  EXPECT_LT(preset, clean);
+  EXPECT_LT(poor, preset);
+}
+
+TEST(SimulatedSegmenterTest, OptionsAreChecked) {
+  for (const std::string& name : SimulatedSegmenterOptions::PresetNames()) {
+    std::string error;
+    EXPECT_TRUE(SimulatedSegmenterOptions::Preset(name).IsValid(&error)) << name << ": " << error;
+  }
+  SimulatedSegmenterOptions options;
+  options.hole_prob = 1.5;
+  std::string error;
+  EXPECT_FALSE(options.IsValid(&error));
+  EXPECT_NE(error.find("hole_prob"), std::string::npos) << error;
+  options = SimulatedSegmenterOptions();
+  options.strength = -1;
+  EXPECT_FALSE(options.IsValid(&error));
+  EXPECT_NE(error.find("strength"), std::string::npos) << error;
+  EXPECT_THROW(Simulate(options, 0), Error);
+  try {
+    SimulatedSegmenterOptions::Preset("fcis");
+    ADD_FAILURE() << "expected an exception";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("fcis-like"), std::string::npos) << e.what();
+  }
+}
+
+TEST(SimulatedSegmenterTest, RejectsBadGroundTruth) {
+  cv::Mat eight_bit(kHeight, kWidth, CV_8U, cv::Scalar(0));
+  EXPECT_THROW(SimulateSegmentation(Clean(), 1, 0, eight_bit, TestTable(), {}), Error);
+  cv::Mat unknown = TestIds();
+  unknown.at<std::uint16_t>(5, 5) = 99;
+  EXPECT_THROW(SimulateSegmentation(Clean(), 1, 0, unknown, TestTable(), {}), Error);
+}
+
+// ---- The segmenter over a sequence on disk ----
+
+class SimulatedSegmenterSequenceTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() /
+           ("segslam_seg_" + std::to_string(::getpid()) + "_" + info->name());
+    fs::remove_all(dir_);
+    SequenceCamera camera;
+    camera.intrinsics = PinholeCamera::FromVerticalFov(kWidth, kHeight, 60);
+    camera.depth_factor = 5000;
+    TumSequenceWriter writer(dir_, camera);
+    fs::create_directories(dir_ / "masks");
+    std::vector<ObjectTrack> tracks;
+    for (int i = 0; i < kFrames; ++i) {
+      RgbdFrame frame;
+      frame.index = i;
+      frame.stamp_s = 1.0 + 0.1 * i;
+      frame.color_bgr = cv::Mat(kHeight, kWidth, CV_8UC3, cv::Scalar(50, 60, 70));
+      frame.depth_m = cv::Mat(kHeight, kWidth, CV_32F, cv::Scalar(2.0f));
+      writer.Add(frame, Eigen::Isometry3d::Identity());
+      WriteInstanceMask(dir_ / "masks" / (TumSequenceWriter::StampName(frame.stamp_s) + ".png"),
+                        TestIds(i));
+    }
+    writer.Finish();
+    TestTable().Write(dir_ / "instances.json");
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  static constexpr int kFrames = 4;
+  fs::path dir_;
+};
+
+TEST_F(SimulatedSegmenterSequenceTest, SameResultWhateverTheFrameOrder) {
+  SimulatedSegmenter forward(dir_, SimulatedSegmenterOptions(), 5);
+  SimulatedSegmenter backward(dir_, SimulatedSegmenterOptions(), 5);
+  const TumSequence sequence = TumSequence::Open(dir_);
+  std::vector<SimulatedFrame> a(kFrames), b(kFrames);
+  for (int i = 0; i < kFrames; ++i) a[i] = forward.SegmentWithTruth(sequence.LoadFrame(i));
+  for (int i = kFrames - 1; i >= 0; --i) b[i] = backward.SegmentWithTruth(sequence.LoadFrame(i));
+  for (int i = 0; i < kFrames; ++i) ExpectSameFrame(a[i], b[i]);
+  // Segment() returns the same segmentation.
+  const FrameSegmentation again = forward.Segment(sequence.LoadFrame(1));
+  ASSERT_EQ(again.instances.size(), a[1].segmentation.instances.size());
+  EXPECT_EQ(forward.name(), "simulated:fcis-like");
+}
+
+TEST_F(SimulatedSegmenterSequenceTest, CleanEqualsTheMaskFiles) {
+  SimulatedSegmenter clean(dir_, Clean(), 5, "clean");
+  const TumSequence sequence = TumSequence::Open(dir_);
+  for (int i = 0; i < kFrames; ++i) {
+    const SimulatedFrame out = clean.SegmentWithTruth(sequence.LoadFrame(i));
+    const cv::Mat ids = ReadInstanceMask(clean.MaskPath(i));
+    ASSERT_EQ(out.gt_ids.size(), 5u);
+    for (size_t k = 0; k < out.gt_ids.size(); ++k) {
+      EXPECT_TRUE(SameMask(out.segmentation.instances[k].mask, GtMask(ids, out.gt_ids[k])));
+    }
+  }
+}
+
+TEST_F(SimulatedSegmenterSequenceTest, TracksMakeOccludedInstancesHarder) {
+  // Instance 2 visible 1000 px in frame 0 and 100 px later: occluded from frame 1.
+  std::vector<ObjectTrack> tracks(1);
+  tracks[0].instance_id = 2;
+  for (int i = 0; i < kFrames; ++i) {
+    TrackSample s;
+    s.frame = i;
+    s.stamp_s = 1.0 + 0.1 * i;
+    s.visible_pixels = i == 0 ? 1000 : 100;
+    tracks[0].samples.push_back(s);
+  }
+  WriteTracks(dir_ / "tracks.json", tracks);
+  SimulatedSegmenterOptions options = Clean();
+  options.miss_occluded_prob = 1;
+  SimulatedSegmenter segmenter(dir_, options, 5);
+  const TumSequence sequence = TumSequence::Open(dir_);
+  auto has = [](const SimulatedFrame& f, std::uint16_t id) {
+    return std::count(f.gt_ids.begin(), f.gt_ids.end(), id) > 0;
+  };
+  EXPECT_TRUE(has(segmenter.SegmentWithTruth(sequence.LoadFrame(0)), 2));
+  EXPECT_FALSE(has(segmenter.SegmentWithTruth(sequence.LoadFrame(1)), 2));
+  EXPECT_TRUE(has(segmenter.SegmentWithTruth(sequence.LoadFrame(1)), 3));
+}
+
+TEST_F(SimulatedSegmenterSequenceTest, BadMasksGiveClearErrors) {
+  SimulatedSegmenter segmenter(dir_, Clean(), 5);
+  const TumSequence sequence = TumSequence::Open(dir_);
+  auto message = [&](int i) {
+    try {
+      segmenter.Segment(sequence.LoadFrame(i));
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  // Wrong size.
+  WriteInstanceMask(segmenter.MaskPath(0), cv::Mat(10, 10, CV_16U, cv::Scalar(0)));
+  EXPECT_NE(message(0).find("10x10"), std::string::npos) << message(0);
+  // Missing.
+  fs::remove(segmenter.MaskPath(1));
+  EXPECT_NE(message(1).find("missing"), std::string::npos) << message(1);
+  // Unknown id.
+  cv::Mat ids = TestIds();
+  ids.at<std::uint16_t>(0, 0) = 42;
+  WriteInstanceMask(segmenter.MaskPath(2), ids);
+  EXPECT_NE(message(2).find("42"), std::string::npos) << message(2);
+  // No masks folder.
+  fs::remove_all(dir_ / "masks");
+  EXPECT_THROW(SimulatedSegmenter(dir_, Clean(), 5), Error);
+}
+
+}  // namespace
+}  // namespace segslam::seg
