@@ -14,6 +14,7 @@
 #include "seg/external_masks.h"
 #include "seg/metrics.h"
 #include "seg/refiner.h"
+#include "seg/sequence_evaluation.h"
 #include "seg/simulated_segmenter.h"
 
 #include <fmt/format.h>
@@ -40,6 +41,7 @@ struct SegEvalArgs {
   std::string poses = "gt";
   bool object_motion = true;
   std::string out_dir;
+  std::vector<std::string> refiner_options;  // NAME=VALUE overrides of RefinerOptions
 };
 
 // The sequences of a dataset: pass1/ and pass2/ of a generated one, or the directory
@@ -53,134 +55,99 @@ std::vector<fs::path> SequencesOf(const fs::path& dataset) {
   return sequences;
 }
 
-// The ground-truth instance of each region: the id it overlaps most in `gt_ids`.
-std::uint16_t DominantGroundTruthId(const cv::Mat& region, const cv::Mat& gt_ids) {
-  std::map<std::uint16_t, int> votes;
-  for (int v = 0; v < region.rows; ++v) {
-    const std::uint8_t* in = region.ptr<std::uint8_t>(v);
-    const std::uint16_t* gt = gt_ids.ptr<std::uint16_t>(v);
-    for (int u = 0; u < region.cols; ++u) {
-      if (in[u] && gt[u]) ++votes[gt[u]];
-    }
+// Sets one refiner option from "name=value" (seg-eval --refiner, for tuning). Throws
+// segslam::Error on an unknown name or a malformed value.
+void SetRefinerOption(seg::RefinerOptions* o, const std::string& assignment) {
+  const size_t eq = assignment.find('=');
+  if (eq == std::string::npos) throw Error("seg-eval --refiner: expected NAME=VALUE, got " + assignment);
+  const std::string name = assignment.substr(0, eq), value = assignment.substr(eq + 1);
+  double x = 0;
+  try {
+    size_t used = 0;
+    x = std::stod(value, &used);
+    if (used != value.size()) throw std::invalid_argument(value);
+  } catch (const std::exception&) {
+    throw Error("seg-eval --refiner " + name + ": not a number: " + value);
   }
-  std::uint16_t best = 0;
-  int best_votes = 0;
-  for (const auto& [id, count] : votes) {
-    if (count > best_votes) best = id, best_votes = count;
+  const std::map<std::string, double*> doubles = {
+      {"w_barycenter", &o->w_barycenter},
+      {"w_shape", &o->w_shape},
+      {"max_match_cost", &o->max_match_cost},
+      {"splat_footprint_scale", &o->splat_footprint_scale},
+      {"depth_tolerance", &o->depth_tolerance},
+      {"min_depth_m", &o->min_depth_m},
+      {"repair_min_current_inside", &o->repair_min_current_inside},
+      {"repair_max_projected_covered", &o->repair_max_projected_covered},
+      {"added_score_decay", &o->added_score_decay},
+      {"min_added_score", &o->min_added_score},
+      {"replace_min_ratio_gap", &o->replace_min_ratio_gap},
+      {"new_region_score_factor", &o->new_region_score_factor},
+      {"min_new_region_score", &o->min_new_region_score},
+      {"matched_previous_score_weight", &o->matched_previous_score_weight},
+  };
+  const std::map<std::string, int*> ints = {
+      {"hole_fill_iterations", &o->hole_fill_iterations},
+      {"min_projected_area_px", &o->min_projected_area_px},
+      {"min_matched_area_px", &o->min_matched_area_px},
+      {"boundary_tolerance_px", &o->boundary_tolerance_px},
+  };
+  const std::map<std::string, bool*> bools = {
+      {"require_same_category", &o->require_same_category},
+      {"fill_missing_depth_with_median", &o->fill_missing_depth_with_median},
+      {"repair_missing_parts", &o->repair_missing_parts},
+      {"trim_instead_of_replace", &o->trim_instead_of_replace},
+  };
+  if (auto it = doubles.find(name); it != doubles.end()) {
+    *it->second = x;
+  } else if (auto it = ints.find(name); it != ints.end()) {
+    *it->second = static_cast<int>(x);
+  } else if (auto it = bools.find(name); it != bools.end()) {
+    *it->second = x != 0;
+  } else if (name == "add_unmatched") {
+    o->add_unmatched = static_cast<seg::AddUnmatchedRule>(static_cast<int>(x));
+  } else {
+    throw Error("seg-eval --refiner: unknown option " + name);
   }
-  return best;
 }
 
-struct SequenceResult {
-  std::string name;
-  seg::SegmentationScores raw;
-  seg::SegmentationScores refined;
-  double refine_ms_median = 0;
-  int frames = 0;
-};
-
-SequenceResult EvaluateSequence(const SegEvalArgs& args, const fs::path& dir,
-                                const fs::path& out_dir) {
-  const TumSequence sequence = TumSequence::Open(dir);
-  if (!sequence.has_groundtruth() || sequence.groundtruth().size() != sequence.size()) {
-    throw FileError(dir / "groundtruth.txt",
-                    "seg-eval needs one ground-truth pose per frame (--poses gt)");
-  }
-  const InstanceTable instances = InstanceTable::Read(dir / "instances.json");
-  std::optional<std::map<std::uint16_t, const ObjectTrack*>> track_of;
-  std::vector<ObjectTrack> tracks;
-  if (args.object_motion && fs::exists(dir / "tracks.json")) {
-    tracks = ReadTracks(dir / "tracks.json");
-    track_of.emplace();
-    for (const auto& track : tracks) (*track_of)[track.instance_id] = &track;
-  }
-
+seg::SequenceSegEval EvaluateSequence(const SegEvalArgs& args, const fs::path& dir,
+                                      const fs::path& out_dir) {
   std::unique_ptr<seg::Segmenter> segmenter;
   if (!args.masks_dir.empty()) {
-    segmenter = std::make_unique<seg::ExternalMaskSegmenter>(args.masks_dir, sequence);
+    segmenter = std::make_unique<seg::ExternalMaskSegmenter>(args.masks_dir, TumSequence::Open(dir));
   } else {
     seg::SimulatedSegmenterOptions options = seg::SimulatedSegmenterOptions::Preset(args.segmenter);
     options.strength = args.strength;
     segmenter = std::make_unique<seg::SimulatedSegmenter>(dir, options, args.seed, args.segmenter);
   }
 
-  seg::SegmentationRefiner refiner;
-  seg::SegmentationEvaluator raw_scores, refined_scores;
-  const PinholeCamera& camera = sequence.camera().intrinsics;
-  const cv::Size size(camera.width, camera.height);
+  seg::SegEvalOptions options;
+  for (const std::string& assignment : args.refiner_options) {
+    SetRefinerOption(&options.refiner, assignment);
+  }
+  options.object_motion = args.object_motion;
   ProgressBar bar("seg-eval " + dir.filename().string());
   const auto start = std::chrono::steady_clock::now();
-  std::vector<double> refine_ms;
-
-  std::optional<seg::FrameSegmentation> previous_refined;
-  cv::Mat previous_depth, previous_gt;
-  RgbdFrame frame;
-  seg::FrameSegmentation initial;
-  seg::RefinementResult refinement;
-  cv::Mat gt_ids;
   const std::atomic<bool>* cancel = InstallInterruptFlag();
-  for (size_t i = 0; i < sequence.size(); ++i) {
+  options.on_frame = [&](int done, int total) {
     if (cancel->load()) throw Error("seg-eval: cancelled");
-    frame = sequence.LoadFrame(i);
-    frame.index = static_cast<int>(i);
-    gt_ids = ReadInstanceMask(dir / "masks" / (fs::path(sequence.entries()[i].rgb_file).stem().string() + ".png"));
-    initial = segmenter->Segment(frame);
-
-    seg::RefinerInput input;
-    input.previous_refined = previous_refined ? &*previous_refined : nullptr;
-    input.previous_depth_m = previous_depth;
-    input.T_wc_previous_fine = sequence.groundtruth()[i > 0 ? i - 1 : 0].T_wc;
-    input.T_wc_current_coarse = sequence.groundtruth()[i].T_wc;
-    input.current_initial = initial;
-    input.camera = camera;
-    // Moving objects are projected with their own ground-truth motion (with --poses gt,
-    // every pose is the true one): T_cur_prev = T_cw(t) T_wo(t) T_ow(t-1) T_wc(t-1).
-    if (previous_refined && track_of) {
-      for (const auto& region : previous_refined->instances) {
-        const std::uint16_t gt_id = DominantGroundTruthId(region.mask, previous_gt);
-        const auto it = track_of->find(gt_id);
-        if (gt_id == 0 || it == track_of->end() || it->second->samples.size() <= i) continue;
-        const TrackSample& before = it->second->samples[i - 1];
-        const TrackSample& now = it->second->samples[i];
-        if (!before.present || !now.present || !before.moving) continue;
-        input.instance_motion_prev[region.track_id] =
-            input.T_wc_current_coarse.inverse() * now.T_world_object *
-            before.T_world_object.inverse() * input.T_wc_previous_fine;
-      }
-    }
-    const auto refine_start = std::chrono::steady_clock::now();
-    refinement = refiner.Refine(input);
-    refine_ms.push_back(std::chrono::duration<double, std::milli>(
-                            std::chrono::steady_clock::now() - refine_start).count());
-
-    raw_scores.AddFrame(gt_ids, instances, initial);
-    refined_scores.AddFrame(gt_ids, instances, refinement.refined);
-    previous_refined = refinement.refined;
-    previous_depth = frame.depth_m;
-    previous_gt = gt_ids;
     const double elapsed_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    bar.Update(static_cast<int>(i + 1), static_cast<int>(sequence.size()), (i + 1) / elapsed_s);
-  }
+    bar.Update(done, total, done / elapsed_s);
+  };
+  seg::SequenceSegEval result = seg::EvaluateSequenceWithGroundTruthPoses(options, dir, *segmenter);
   bar.Finish();
 
   // The paper's Fig. 5: the last frame's ground truth, initial and refined instances.
-  if (!out_dir.empty() && sequence.size() > 0) {
+  if (!out_dir.empty() && result.frames > 0) {
+    const cv::Size size = result.last_gt_ids.size();
     const cv::Mat row = CaptionedRow(
-        {OverlayPicture(frame.color_bgr, gt_ids),
-         OverlayPicture(frame.color_bgr, initial.ToIdImage(size)),
-         OverlayPicture(frame.color_bgr, refinement.refined.ToIdImage(size))},
+        {OverlayPicture(result.last_color_bgr, result.last_gt_ids),
+         OverlayPicture(result.last_color_bgr, result.last_initial.ToIdImage(size)),
+         OverlayPicture(result.last_color_bgr, result.last_refined.ToIdImage(size))},
         {"ground truth", "initial (" + segmenter->name() + ")", "refined"});
     WriteImageAtomically(out_dir / (dir.filename().string() + "_last_frame.png"), row);
   }
-
-  SequenceResult result;
-  result.name = dir.filename().string();
-  result.raw = raw_scores.Scores();
-  result.refined = refined_scores.Scores();
-  result.frames = static_cast<int>(sequence.size());
-  std::sort(refine_ms.begin(), refine_ms.end());
-  result.refine_ms_median = refine_ms.empty() ? 0 : refine_ms[refine_ms.size() / 2];
   return result;
 }
 
@@ -196,7 +163,7 @@ int RunSegEval(const SegEvalArgs& args) {
   fs::create_directories(out_dir, error);
   if (error) throw FileError(out_dir, "cannot create: " + error.message());
 
-  std::vector<SequenceResult> results;
+  std::vector<seg::SequenceSegEval> results;
   for (const fs::path& dir : SequencesOf(args.dataset)) results.push_back(EvaluateSequence(args, dir, out_dir));
 
   const std::string segmenter_name =
@@ -220,7 +187,16 @@ int RunSegEval(const SegEvalArgs& args) {
                                  {"frames", r.frames},
                                  {"raw", r.raw.ToJson()},
                                  {"refined", r.refined.ToJson()},
-                                 {"refine_ms_median", r.refine_ms_median}});
+                                 {"refine_ms_median", r.refine_ms_median},
+                                 {"decisions",
+                                  {{"new", r.decision_counts[0]},
+                                   {"kept", r.decision_counts[1]},
+                                   {"replaced", r.decision_counts[2]},
+                                   {"added", r.decision_counts[3]},
+                                   {"dropped", r.decision_counts[4]}}}});
+    fmt::print("{:<10} decisions: kept {} replaced {} new {} added {} dropped {}\n", "",
+               r.decision_counts[1], r.decision_counts[2], r.decision_counts[0],
+               r.decision_counts[3], r.decision_counts[4]);
   }
   fmt::print("(points: percent; overlays of each sequence's last frame in {})\n", out_dir.string());
   WriteFileAtomically(out_dir / "seg_eval.json", json.dump(2) + "\n");
@@ -245,6 +221,8 @@ void AddSegEvalCommand(CLI::App& app, std::function<int()>* action) {
   command->add_option("--poses", args->poses, "Camera poses for the refinement: gt")->capture_default_str();
   command->add_flag("!--no-object-motion", args->object_motion,
                     "Project moving objects with the camera motion only (as the paper)");
+  command->add_option("--refiner", args->refiner_options,
+                      "Override a refiner option, NAME=VALUE (repeatable; see seg/refiner.h)");
   command->add_option("--out", args->out_dir, "Where to write seg_eval.json and pictures "
                                               "(default: DATASET/seg_eval)");
   command->callback([args, action] { *action = [args] { return RunSegEval(*args); }; });

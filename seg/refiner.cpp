@@ -7,6 +7,8 @@
 #include <numeric>
 #include <sstream>
 
+#include <opencv2/imgproc.hpp>
+
 #include "core/error.h"
 
 namespace segslam::seg {
@@ -111,6 +113,25 @@ bool RefinerOptions::IsValid(std::string* error) const {
   }
   if (!finite(min_depth_m) || min_depth_m <= 0) return fail("min_depth_m must be > 0");
   if (min_projected_area_px < 0) return fail("min_projected_area_px must be >= 0");
+  if (!finite(replace_min_ratio_gap) || replace_min_ratio_gap < 0 ||
+      replace_min_ratio_gap >= 1) {
+    return fail("replace_min_ratio_gap must lie in [0, 1)");
+  }
+  if (min_matched_area_px < 0) return fail("min_matched_area_px must be >= 0");
+  if (boundary_tolerance_px < 0 || boundary_tolerance_px > 16) {
+    return fail("boundary_tolerance_px must lie in [0, 16]");
+  }
+  if (!finite(min_new_region_score) || min_new_region_score < 0 || min_new_region_score > 1) {
+    return fail("min_new_region_score must lie in [0, 1]");
+  }
+  if (!finite(matched_previous_score_weight) || matched_previous_score_weight < 0 ||
+      matched_previous_score_weight > 1) {
+    return fail("matched_previous_score_weight must lie in [0, 1]");
+  }
+  if (!finite(new_region_score_factor) || new_region_score_factor <= 0 ||
+      new_region_score_factor > 1) {
+    return fail("new_region_score_factor must lie in (0, 1]");
+  }
   if (!finite(repair_min_current_inside) || repair_min_current_inside <= 0 ||
       repair_min_current_inside > 1) {
     return fail("repair_min_current_inside must lie in (0, 1]");
@@ -486,7 +507,7 @@ RefinementResult SegmentationRefiner::Refine(const RefinerInput& in) {
   std::vector<Candidate> candidates;
   const double diagonal = std::hypot(in.camera.width, in.camera.height);
   for (size_t p = 0; p < n_prev; ++p) {
-    if (prev_stats[p].area_px < std::max(1, options_.min_projected_area_px)) continue;
+    if (prev_stats[p].area_px < std::max(1, options_.min_matched_area_px)) continue;
     for (size_t c = 0; c < n_cur; ++c) {
       if (cur_stats[c].area_px == 0) continue;
       if (options_.require_same_category &&
@@ -531,15 +552,46 @@ RefinementResult SegmentationRefiner::Refine(const RefinerInput& in) {
     if (p < 0) {
       d.kind = RegionDecision::Kind::kNew;
       instance.track_id = FreshId();
+      instance.score = static_cast<float>(instance.score * options_.new_region_score_factor);
+      if (instance.score < options_.min_new_region_score) {
+        d.kind = RegionDecision::Kind::kDropped;
+        d.track_id = instance.track_id;
+        result.decisions.push_back(d);
+        continue;
+      }
     } else {
       const Candidate& k = *cand_of_cur[c];
-      const double ra_c = static_cast<double>(k.intersection) / cur_stats[c].area_px;
-      const double ra_p = static_cast<double>(k.intersection) / prev_stats[p].area_px;
-      bool replace = ra_c < ra_p;  // the paper's rule: |Re_c| > |Re_p|
-      if (options_.repair_missing_parts && ra_c >= options_.repair_min_current_inside &&
-          ra_p < options_.repair_max_projected_covered) {
-        replace = true;
+      // Ratios up to the boundary tolerance: a pixel of one region counts as confirmed
+      // by the other when it lies within boundary_tolerance_px of it.
+      const int tol = options_.boundary_tolerance_px;
+      double ra_c = static_cast<double>(k.intersection) / cur_stats[c].area_px;
+      double ra_p = static_cast<double>(k.intersection) / prev_stats[p].area_px;
+      cv::Mat projected_mask, trimmed;
+      cv::Rect roi;
+      if (tol > 0) {
+        projected_mask = RegionMask(ws, p);
+        roi = cur_stats[c].bbox | prev_stats[p].bbox;
+        roi.x -= tol;
+        roi.y -= tol;
+        roi.width += 2 * tol;
+        roi.height += 2 * tol;
+        roi &= cv::Rect(0, 0, in.camera.width, in.camera.height);
+        const cv::Mat mc = current.instances[c].mask(roi) != 0;
+        const cv::Mat mp = projected_mask(roi) != 0;
+        const cv::Mat kernel = cv::getStructuringElement(
+            cv::MORPH_ELLIPSE, cv::Size(2 * tol + 1, 2 * tol + 1));
+        cv::Mat mc_wide, mp_wide;
+        cv::dilate(mc, mc_wide, kernel);
+        cv::dilate(mp, mp_wide, kernel);
+        trimmed = mc & mp_wide;
+        ra_c = static_cast<double>(cv::countNonZero(trimmed)) / cur_stats[c].area_px;
+        ra_p = static_cast<double>(cv::countNonZero(mp & mc_wide)) / prev_stats[p].area_px;
       }
+      const bool shrink = ra_p - ra_c > options_.replace_min_ratio_gap;  // paper: gap 0
+      const bool repair = options_.repair_missing_parts &&
+                          ra_c >= options_.repair_min_current_inside &&
+                          ra_p < options_.repair_max_projected_covered;
+      const bool replace = shrink || repair;
       d.kind = replace ? RegionDecision::Kind::kReplaced : RegionDecision::Kind::kKept;
       d.previous_index = p;
       d.cost = k.cost;
@@ -547,7 +599,16 @@ RefinementResult SegmentationRefiner::Refine(const RefinerInput& in) {
       d.ratio_projected = ra_p;
       d.projected_area_px = prev_stats[p].area_px;
       instance.track_id = previous.instances[p].track_id;
-      if (replace) instance.mask = RegionMask(ws, p);
+      if (shrink && !repair && options_.trim_instead_of_replace && !trimmed.empty()) {
+        cv::Mat mask(current.instances[c].mask.size(), CV_8U, cv::Scalar(0));
+        mask(roi).setTo(1, trimmed);
+        instance.mask = mask;
+      } else if (replace) {
+        instance.mask = projected_mask.empty() ? RegionMask(ws, p) : projected_mask;
+      }
+      instance.score = std::max(
+          instance.score, static_cast<float>(options_.matched_previous_score_weight *
+                                             previous.instances[p].score));
     }
     d.track_id = instance.track_id;
     result.decisions.push_back(d);

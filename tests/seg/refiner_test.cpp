@@ -294,7 +294,11 @@ TEST(SegmentationRefinerTest, PaperRuleShrinksOversizedAndKeepsCutOff) {
   current.instances.push_back(Instance(0, 62, RectMask(cv::Rect(250, 200, 80, 100))));
   current.instances.push_back(Instance(0, 1, RectMask(scene.person_b)));
   current.instances.push_back(Instance(0, 47, RectMask(cv::Rect(10, 400, 30, 30))));
-  SegmentationRefiner refiner;  // defaults: the paper's rule
+  RefinerOptions paper;  // the paper's rule: exact ratios, any gap, take Re_p
+  paper.replace_min_ratio_gap = 0;
+  paper.boundary_tolerance_px = 0;
+  paper.trim_instead_of_replace = false;
+  SegmentationRefiner refiner(paper);
   const RefinementResult r = refiner.Refine(scene.Input(current));
   SCOPED_TRACE(r.BriefReport());
   ASSERT_EQ(r.refined.instances.size(), 4u);
@@ -309,6 +313,35 @@ TEST(SegmentationRefinerTest, PaperRuleShrinksOversizedAndKeepsCutOff) {
   EXPECT_EQ(r.refined.instances[3].track_id, 10);  // above every previous id
 }
 
+TEST(SegmentationRefinerTest, DefaultsKeepSlightlyLargerRegionsAndTrimGrossOnes) {
+  const Scene scene;
+  FrameSegmentation current;
+  // Person A 30 px too wide (gap 1 - 80/110 = 0.27 < 0.45: kept as it is, the paper
+  // would replace it); person B twice as wide (gap ~0.5: trimmed to the projection
+  // plus the 2 px tolerance, on the side where it bled).
+  const cv::Rect wide_a(scene.person_a.x, scene.person_a.y, scene.person_a.width + 30,
+                        scene.person_a.height);
+  const cv::Rect wide_b(scene.person_b.x, scene.person_b.y, 2 * scene.person_b.width,
+                        scene.person_b.height);
+  current.instances.push_back(Instance(0, 1, RectMask(wide_a), 0.6f));
+  current.instances.push_back(Instance(0, 62, RectMask(scene.chair), 0.9f));
+  current.instances.push_back(Instance(0, 1, RectMask(wide_b), 0.5f));
+  SegmentationRefiner refiner;
+  const RefinementResult r = refiner.Refine(scene.Input(current));
+  SCOPED_TRACE(r.BriefReport());
+  ASSERT_EQ(r.refined.instances.size(), 3u);
+  EXPECT_EQ(r.decisions[0].kind, RegionDecision::Kind::kKept);
+  EXPECT_EQ(r.refined.instances[0].track_id, 5);
+  EXPECT_EQ(Differences(r.refined.instances[0].mask, RectMask(wide_a)), 0);
+  EXPECT_EQ(r.decisions[1].kind, RegionDecision::Kind::kKept);
+  EXPECT_EQ(r.decisions[2].kind, RegionDecision::Kind::kReplaced);
+  EXPECT_EQ(r.refined.instances[2].track_id, 9);
+  const cv::Rect trimmed_b(scene.person_b.x, scene.person_b.y, scene.person_b.width + 2,
+                           scene.person_b.height);
+  EXPECT_LE(Differences(r.refined.instances[2].mask, RectMask(trimmed_b)), 4);
+  EXPECT_FLOAT_EQ(r.refined.instances[2].score, 0.5f);  // scores are the segmenter's
+}
+
 TEST(SegmentationRefinerTest, NoAddWhenCountsAreEqualAndCategoryMustMatch) {
   const Scene scene;
   FrameSegmentation current;
@@ -317,7 +350,9 @@ TEST(SegmentationRefinerTest, NoAddWhenCountsAreEqualAndCategoryMustMatch) {
   current.instances.push_back(Instance(0, 1, RectMask(scene.person_a)));
   current.instances.push_back(Instance(0, 18, RectMask(scene.chair)));
   current.instances.push_back(Instance(0, 1, RectMask(cv::Rect(300, 20, 40, 40))));
-  SegmentationRefiner refiner;
+  RefinerOptions paper;  // the paper's count rule (the default adds per region)
+  paper.add_unmatched = AddUnmatchedRule::kPaperCountRule;
+  SegmentationRefiner refiner(paper);
   const RefinementResult r = refiner.Refine(scene.Input(current));
   SCOPED_TRACE(r.BriefReport());
   ASSERT_EQ(r.refined.instances.size(), 3u);

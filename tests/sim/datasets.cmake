@@ -26,3 +26,8 @@ segslam_add_test(sim_dataset_tests
   FIXTURE sim_datasets)
 target_compile_definitions(sim_dataset_tests PRIVATE
   SEGSLAM_TEST_DATA_DIR="${SEGSLAM_TEST_DATA_DIR}")
+
+# The segmentation refinement's acceptance (tests/seg/seg_eval_test.cpp): default sensor
+# noise, both passes of the city and the office with walking people.
+segslam_add_test_dataset(city_seg scenarios/city_two_pass.yaml --frames 80)
+segslam_add_test_dataset(office_seg scenarios/office_walking_xyz.yaml --frames 80)

@@ -1,0 +1,129 @@
+#include "seg/sequence_evaluation.h"
+
+#include <algorithm>
+#include <chrono>
+#include <map>
+#include <optional>
+#include <vector>
+
+#include "core/error.h"
+#include "core/image_io.h"
+#include "core/instances.h"
+#include "core/tracks.h"
+#include "core/tum_dataset.h"
+
+namespace segslam::seg {
+namespace {
+
+namespace fs = std::filesystem;
+
+// The ground-truth instance of a region: the id it overlaps most in `gt_ids`.
+std::uint16_t DominantGroundTruthId(const cv::Mat& region, const cv::Mat& gt_ids) {
+  std::map<std::uint16_t, int> votes;
+  for (int v = 0; v < region.rows; ++v) {
+    const std::uint8_t* in = region.ptr<std::uint8_t>(v);
+    const std::uint16_t* gt = gt_ids.ptr<std::uint16_t>(v);
+    for (int u = 0; u < region.cols; ++u) {
+      if (in[u] && gt[u]) ++votes[gt[u]];
+    }
+  }
+  std::uint16_t best = 0;
+  int best_votes = 0;
+  for (const auto& [id, count] : votes) {
+    if (count > best_votes) best = id, best_votes = count;
+  }
+  return best;
+}
+
+}  // namespace
+
+SequenceSegEval EvaluateSequenceWithGroundTruthPoses(const SegEvalOptions& options,
+                                                      const fs::path& dir,
+                                                      Segmenter& segmenter) {
+  const TumSequence sequence = TumSequence::Open(dir);
+  if (!sequence.has_groundtruth() || sequence.groundtruth().size() != sequence.size()) {
+    throw FileError(dir / "groundtruth.txt",
+                    "seg-eval needs one ground-truth pose per frame (--poses gt)");
+  }
+  const InstanceTable instances = InstanceTable::Read(dir / "instances.json");
+  std::optional<std::map<std::uint16_t, const ObjectTrack*>> track_of;
+  std::vector<ObjectTrack> tracks;
+  if (options.object_motion && fs::exists(dir / "tracks.json")) {
+    tracks = ReadTracks(dir / "tracks.json");
+    track_of.emplace();
+    for (const auto& track : tracks) (*track_of)[track.instance_id] = &track;
+  }
+
+  SegmentationRefiner refiner(options.refiner);
+  SegmentationEvaluator raw_scores, refined_scores;
+  const PinholeCamera& camera = sequence.camera().intrinsics;
+  std::vector<double> refine_ms;
+  SequenceSegEval result;
+  result.name = dir.filename().string();
+
+  std::optional<FrameSegmentation> previous_refined;
+  cv::Mat previous_depth, previous_gt;
+  RgbdFrame frame;
+  FrameSegmentation initial;
+  RefinementResult refinement;
+  cv::Mat gt_ids;
+  for (size_t i = 0; i < sequence.size(); ++i) {
+    frame = sequence.LoadFrame(i);
+    frame.index = static_cast<int>(i);
+    gt_ids = ReadInstanceMask(
+        dir / "masks" / (fs::path(sequence.entries()[i].rgb_file).stem().string() + ".png"));
+    initial = segmenter.Segment(frame);
+
+    RefinerInput input;
+    input.previous_refined = previous_refined ? &*previous_refined : nullptr;
+    input.previous_depth_m = previous_depth;
+    input.T_wc_previous_fine = sequence.groundtruth()[i > 0 ? i - 1 : 0].T_wc;
+    input.T_wc_current_coarse = sequence.groundtruth()[i].T_wc;
+    input.current_initial = initial;
+    input.camera = camera;
+    // Moving objects are projected with their own ground-truth motion (with ground-truth
+    // poses every pose is the true one): T_cur_prev = T_cw(t) T_wo(t) T_ow(t-1) T_wc(t-1).
+    if (previous_refined && track_of) {
+      for (const auto& region : previous_refined->instances) {
+        const std::uint16_t gt_id = DominantGroundTruthId(region.mask, previous_gt);
+        const auto it = track_of->find(gt_id);
+        if (gt_id == 0 || it == track_of->end() || it->second->samples.size() <= i) continue;
+        const TrackSample& before = it->second->samples[i - 1];
+        const TrackSample& now = it->second->samples[i];
+        if (!before.present || !now.present || !before.moving) continue;
+        input.instance_motion_prev[region.track_id] =
+            input.T_wc_current_coarse.inverse() * now.T_world_object *
+            before.T_world_object.inverse() * input.T_wc_previous_fine;
+      }
+    }
+    const auto refine_start = std::chrono::steady_clock::now();
+    refinement = refiner.Refine(input);
+    refine_ms.push_back(std::chrono::duration<double, std::milli>(
+                            std::chrono::steady_clock::now() - refine_start).count());
+    for (const RegionDecision& d : refinement.decisions) {
+      ++result.decision_counts[static_cast<int>(d.kind)];
+    }
+
+    raw_scores.AddFrame(gt_ids, instances, initial);
+    refined_scores.AddFrame(gt_ids, instances, refinement.refined);
+    previous_refined = refinement.refined;
+    previous_depth = frame.depth_m;
+    previous_gt = gt_ids;
+    if (options.on_frame) {
+      options.on_frame(static_cast<int>(i + 1), static_cast<int>(sequence.size()));
+    }
+  }
+
+  result.frames = static_cast<int>(sequence.size());
+  result.raw = raw_scores.Scores();
+  result.refined = refined_scores.Scores();
+  std::sort(refine_ms.begin(), refine_ms.end());
+  result.refine_ms_median = refine_ms.empty() ? 0 : refine_ms[refine_ms.size() / 2];
+  result.last_color_bgr = frame.color_bgr;
+  result.last_gt_ids = gt_ids;
+  result.last_initial = std::move(initial);
+  result.last_refined = std::move(refinement.refined);
+  return result;
+}
+
+}  // namespace segslam::seg
