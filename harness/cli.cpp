@@ -24,6 +24,7 @@ int RunCli(int argc, char** argv) {
   AddBenchCommand(app, &action);
   AddPreviewCommand(app, &action);
   AddSegEvalCommand(app, &action);
+  AddEvalTrajCommand(app, &action);
 
   try {
     app.parse(argc, argv);

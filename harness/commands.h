@@ -12,5 +12,6 @@ void AddGenerateCommand(CLI::App& app, std::function<int()>* action);
 void AddBenchCommand(CLI::App& app, std::function<int()>* action);
 void AddPreviewCommand(CLI::App& app, std::function<int()>* action);
 void AddSegEvalCommand(CLI::App& app, std::function<int()>* action);
+void AddEvalTrajCommand(CLI::App& app, std::function<int()>* action);
 
 }  // namespace segslam::harness
