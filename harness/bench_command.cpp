@@ -1,15 +1,22 @@
 // `segslam bench render SCENARIO`: frames per second of the whole generation
 // (render + noise + PNG encoding + writing) and of rendering alone, per GL back-end.
+// `segslam bench slam SEQUENCE`: per-frame tracking time of the SLAM core, split by
+// stage, and the local bundle adjustment time per keyframe.
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "harness/commands.h"
 #include "harness/progress_bar.h"
+#include "harness/slam_runner.h"
 #include "scenes/scenario.h"
 #include "sim/dataset_generator.h"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <opencv2/core/utility.hpp>
+
+#include <algorithm>
+#include <chrono>
 #include <filesystem>
 #include <memory>
 #include <thread>
@@ -91,6 +98,74 @@ int RunBenchRender(const BenchRenderArgs& args) {
   return 0;
 }
 
+struct BenchSlamArgs {
+  std::string sequence;
+  std::string mode = "mutual";
+  int frames = 0;
+  std::string json_file;
+};
+
+struct TimeSummary {
+  double median = 0, p90 = 0, mean = 0;
+};
+
+TimeSummary Summarize(std::vector<double> values) {
+  TimeSummary summary;
+  if (values.empty()) return summary;
+  std::sort(values.begin(), values.end());
+  summary.median = values.size() % 2 ? values[values.size() / 2]
+                                     : 0.5 * (values[values.size() / 2 - 1] + values[values.size() / 2]);
+  summary.p90 = values[std::min(values.size() - 1, static_cast<size_t>(0.9 * values.size()))];
+  double sum = 0;
+  for (double v : values) sum += v;
+  summary.mean = sum / values.size();
+  return summary;
+}
+
+int RunBenchSlam(const BenchSlamArgs& args) {
+  // One core, as ORB-SLAM2's tracking thread: OpenCV's own threads would flatter us.
+  cv::setNumThreads(1);
+  const TumSequence sequence = TumSequence::Open(args.sequence);
+  SlamRunOptions options;
+  options.mode = slam::ParseSlamMode(args.mode);
+  options.max_frames = args.frames;
+  ProgressBar bar("bench slam " + args.mode);
+  const auto start = std::chrono::steady_clock::now();
+  options.on_frame = [&](int done, int total) {
+    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    bar.Update(done, total, done / elapsed);
+  };
+  const SlamRunResult run = RunSlamOnSequence(sequence, options);
+  bar.Finish();
+
+  std::vector<std::pair<std::string, std::vector<double>>> stages = {
+      {"features", {}}, {"coarse", {}}, {"judge", {}}, {"fine", {}}, {"map update", {}}, {"tracking total", {}}};
+  std::vector<double> bundle_adjustment;
+  for (const slam::FrameResult& frame : run.frames) {
+    const slam::FrameTimings& t = frame.timings;
+    const double values[] = {t.features_ms, t.coarse_ms, t.judge_ms, t.fine_ms, t.map_update_ms, t.TrackingMs()};
+    for (size_t k = 0; k < stages.size(); ++k) stages[k].second.push_back(values[k]);
+    if (frame.keyframe && t.bundle_adjustment_ms > 0) bundle_adjustment.push_back(t.bundle_adjustment_ms);
+  }
+  fmt::print("sequence {} ({}x{}), mode {}, {} frames, {} features requested, one core\n", args.sequence,
+             sequence.camera().intrinsics.width, sequence.camera().intrinsics.height, args.mode,
+             run.frames.size(), slam::TrackerOptions().orb.max_features);
+  fmt::print("{:<26} {:>10} {:>10} {:>10}\n", "stage (ms per frame)", "median", "p90", "mean");
+  nlohmann::json json = {{"sequence", args.sequence}, {"mode", args.mode}, {"frames", run.frames.size()}};
+  for (const auto& [name, values] : stages) {
+    const TimeSummary s = Summarize(values);
+    fmt::print("{:<26} {:>10.2f} {:>10.2f} {:>10.2f}\n", name, s.median, s.p90, s.mean);
+    json["stages_ms"][name] = {{"median", s.median}, {"p90", s.p90}, {"mean", s.mean}};
+  }
+  const TimeSummary ba = Summarize(bundle_adjustment);
+  fmt::print("{:<26} {:>10.2f} {:>10.2f} {:>10.2f}  ({} keyframes)\n", "bundle adj. per keyframe", ba.median,
+             ba.p90, ba.mean, bundle_adjustment.size());
+  json["bundle_adjustment_per_keyframe_ms"] = {
+      {"median", ba.median}, {"p90", ba.p90}, {"mean", ba.mean}, {"keyframes", bundle_adjustment.size()}};
+  if (!args.json_file.empty()) WriteFileAtomically(args.json_file, json.dump(2) + "\n");
+  return 0;
+}
+
 }  // namespace
 
 void AddBenchCommand(CLI::App& app, std::function<int()>* action) {
@@ -109,6 +184,18 @@ void AddBenchCommand(CLI::App& app, std::function<int()>* action) {
   render->add_option("--json", args->json_file, "Also write the results as JSON");
   render->add_option("--work-dir", args->work_dir, "Scratch directory (default: system temp)");
   render->callback([args, action] { *action = [args] { return RunBenchRender(*args); }; });
+
+  auto slam_args = std::make_shared<BenchSlamArgs>();
+  CLI::App* slam = bench->add_subcommand(
+      "slam", "Per-frame tracking time of the SLAM core by stage, and bundle adjustment per keyframe");
+  slam->add_option("sequence", slam_args->sequence, "A TUM-layout sequence (with masks/ for mutual)")->required();
+  slam->add_option("--mode", slam_args->mode, "plain, mask-moveable or mutual")
+      ->check(CLI::IsMember({"plain", "mask-moveable", "mutual"}))
+      ->capture_default_str();
+  slam->add_option("--frames", slam_args->frames, "Only the first N frames (0 = all)")
+      ->check(CLI::NonNegativeNumber);
+  slam->add_option("--json", slam_args->json_file, "Also write the results as JSON");
+  slam->callback([slam_args, action] { *action = [slam_args] { return RunBenchSlam(*slam_args); }; });
 }
 
 }  // namespace segslam::harness

@@ -25,6 +25,7 @@ int RunCli(int argc, char** argv) {
   AddPreviewCommand(app, &action);
   AddSegEvalCommand(app, &action);
   AddEvalTrajCommand(app, &action);
+  AddRunCommand(app, &action);
 
   try {
     app.parse(argc, argv);

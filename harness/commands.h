@@ -13,5 +13,6 @@ void AddBenchCommand(CLI::App& app, std::function<int()>* action);
 void AddPreviewCommand(CLI::App& app, std::function<int()>* action);
 void AddSegEvalCommand(CLI::App& app, std::function<int()>* action);
 void AddEvalTrajCommand(CLI::App& app, std::function<int()>* action);
+void AddRunCommand(CLI::App& app, std::function<int()>* action);
 
 }  // namespace segslam::harness

@@ -31,3 +31,8 @@ target_compile_definitions(sim_dataset_tests PRIVATE
 # noise, both passes of the city and the office with walking people.
 segslam_add_test_dataset(city_seg scenarios/city_two_pass.yaml --frames 80)
 segslam_add_test_dataset(office_seg scenarios/office_walking_xyz.yaml --frames 80)
+
+# The SLAM core's checks (tests/harness/slam_run_test.cpp): a static office with the
+# default sensor noise; city_static, city_seg and office_seg above serve too.
+segslam_add_test_dataset(office_static scenarios/office_walking_xyz.yaml
+  --frames 90 --set office.people_walking=0)

@@ -1,0 +1,140 @@
+// `segslam run`: the SLAM core over a sequence, or over both passes of a generated
+// dataset (pass 1 builds the long-term map, pass 2 localizes on it: the paper's
+// relocalization protocol).
+#include <chrono>
+#include <cstdio>
+
+#include <fmt/core.h>
+
+#include "core/error.h"
+#include "harness/commands.h"
+#include "harness/interrupt.h"
+#include "harness/progress_bar.h"
+#include "harness/slam_runner.h"
+#include "harness/trajectory_metrics.h"
+
+namespace segslam::harness {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct RunArgs {
+  std::string dataset;
+  std::string mode = "mutual";
+  std::string masks = "gt";
+  std::string map_in;
+  std::string map_out;
+  std::string out_dir;
+  int frames = 0;
+  bool quiet = false;
+};
+
+struct PassOutcome {
+  SlamRunResult run;
+  std::optional<AteResult> ate;
+};
+
+PassOutcome RunPass(const RunArgs& args, const fs::path& sequence_dir, const fs::path& map_in,
+                    const fs::path& map_out, const fs::path& out_dir,
+                    const std::optional<Eigen::Isometry3d>& fixed_alignment) {
+  const TumSequence sequence = TumSequence::Open(sequence_dir);
+  SlamRunOptions options;
+  options.mode = slam::ParseSlamMode(args.mode);
+  options.masks = args.masks;
+  options.map_in = map_in;
+  options.max_frames = args.frames;
+  ProgressBar bar(fmt::format("run {} {}", args.mode, sequence_dir.filename().string()));
+  const std::atomic<bool>* cancel = InstallInterruptFlag();
+  const auto start = std::chrono::steady_clock::now();
+  options.on_frame = [&](int done, int total) {
+    if (cancel->load()) throw Error("run: cancelled");
+    if (args.quiet) return;
+    const double elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    bar.Update(done, total, done / elapsed_s);
+  };
+  PassOutcome outcome;
+  outcome.run = RunSlamOnSequence(sequence, options);
+  if (!args.quiet) bar.Finish();
+
+  fs::create_directories(out_dir);
+  WriteTumTrajectory(out_dir / "trajectory.txt", outcome.run.trajectory,
+                     fmt::format("segslam run, mode {}, sequence {}\ncamera-to-world T_wc of localized frames",
+                                 args.mode, sequence_dir.string()));
+  WriteFrameLog(out_dir / "frames.jsonl", outcome.run.frames);
+  if (!map_out.empty()) {
+    slam::SaveLongTermMap(map_out, outcome.run.long_term_map);
+    fs::path ply = map_out;
+    ply.replace_extension(".ply");
+    slam::ExportPly(ply, outcome.run.long_term_map);
+  }
+  if (sequence.has_groundtruth() && outcome.run.trajectory.size() >= 3) {
+    AteOptions ate_options;
+    std::vector<StampedPose> estimate = outcome.run.trajectory;
+    if (fixed_alignment.has_value()) {
+      ate_options.align = false;
+      for (StampedPose& pose : estimate) pose.T_wc = *fixed_alignment * pose.T_wc;
+    }
+    outcome.ate = ComputeAte(sequence.groundtruth(), estimate, ate_options);
+  }
+  return outcome;
+}
+
+void PrintPass(const std::string& name, const PassOutcome& pass, bool aligned) {
+  const SlamRunResult& run = pass.run;
+  fmt::print("{:<8} {:>6} {:>9.1f}% {:>9} {:>9} {:>10.2f}", name, run.frames.size(), 100 * run.LocalizedShare(),
+             run.keyframes, run.map_points, run.MedianTrackingMs());
+  if (pass.ate.has_value()) {
+    fmt::print(" {:>10.4f} {:>10.4f}  {}\n", pass.ate->translation_m.rmse, pass.ate->translation_m.max, aligned ? "aligned" : "map frame");
+  } else {
+    fmt::print(" {:>10} {:>10}\n", "n/a", "n/a");
+  }
+}
+
+int RunRun(const RunArgs& args) {
+  const fs::path dataset(args.dataset);
+  const fs::path out_dir = args.out_dir.empty() ? dataset / ("run_" + args.mode) : fs::path(args.out_dir);
+  const bool two_pass = fs::is_directory(dataset / "pass1") && fs::is_directory(dataset / "pass2");
+  fmt::print("segslam run: mode {}, masks {}\n", args.mode, args.mode == "plain" ? "none" : args.masks);
+  std::vector<std::pair<std::string, PassOutcome>> passes;
+  if (two_pass) {
+    if (!args.map_in.empty()) throw Error("run: --map-in applies to a single sequence; " + args.dataset + " has two passes");
+    const fs::path map1 = args.map_out.empty() ? out_dir / "pass1" / "map.segslam" : fs::path(args.map_out);
+    fs::create_directories(map1.parent_path().empty() ? fs::path(".") : map1.parent_path());
+    passes.emplace_back("pass1", RunPass(args, dataset / "pass1", {}, map1, out_dir / "pass1", std::nullopt));
+    // Pass 2 is scored in the map's frame: pass 1's alignment to the ground truth, not
+    // a new one (the paper's Table III).
+    std::optional<Eigen::Isometry3d> alignment;
+    if (passes[0].second.ate.has_value()) alignment = passes[0].second.ate->T_gt_est;
+    passes.emplace_back("pass2", RunPass(args, dataset / "pass2", map1, {}, out_dir / "pass2", alignment));
+  } else {
+    passes.emplace_back(dataset.filename().string(),
+                        RunPass(args, dataset, args.map_in, args.map_out, out_dir, std::nullopt));
+  }
+  fmt::print("\n{:<8} {:>6} {:>10} {:>9} {:>9} {:>10} {:>10} {:>10}\n", "sequence", "frames", "localized",
+             "keyframes", "points", "track ms", "ATE rmse m", "ATE max m");
+  for (const auto& [name, pass] : passes) PrintPass(name, pass, !(two_pass && name == "pass2"));
+  fmt::print("outputs in {}\n", out_dir.string());
+  return 0;
+}
+
+}  // namespace
+
+void AddRunCommand(CLI::App& app, std::function<int()>* action) {
+  auto args = std::make_shared<RunArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "run", "Run the SLAM core on a sequence (TUM layout), or on both passes of a generated dataset");
+  cmd->add_option("dataset", args->dataset, "A TUM-layout sequence, or a dataset with pass1/ and pass2/")
+      ->required();
+  cmd->add_option("--mode", args->mode, "plain, mask-moveable or mutual")
+      ->check(CLI::IsMember({"plain", "mask-moveable", "mutual"}));
+  cmd->add_option("--masks", args->masks, "'gt' (the dataset's masks) or a folder of external masks");
+  cmd->add_option("--map-in", args->map_in, "Localize on this long-term map (single sequence)");
+  cmd->add_option("--map-out", args->map_out, "Write the long-term map here (and a .ply beside it)");
+  cmd->add_option("--out", args->out_dir, "Output folder (default DATASET/run_MODE)");
+  cmd->add_option("--frames", args->frames, "Only the first N frames of each sequence (0 = all)");
+  cmd->add_flag("-q,--quiet", args->quiet, "No progress bar");
+  cmd->callback([args, action] { *action = [args] { return RunRun(*args); }; });
+}
+
+}  // namespace segslam::harness

@@ -1,0 +1,364 @@
+#include "slam/orb_extractor.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <opencv2/features2d.hpp>
+#include <opencv2/imgproc.hpp>
+#include <string>
+
+#include "core/error.h"
+
+namespace segslam::slam {
+namespace {
+
+// FAST looks at a circle of radius 3 and reports no corner within 3 px of its input's
+// edge, so detection windows are widened by this much to find corners up to their edge.
+constexpr int kFastRadiusPx = 3;
+constexpr int kOrientationRadiusPx = OrbExtractor::kPatchSizePx / 2;
+
+struct Corner {
+  int x = 0;  // level pixel coordinates
+  int y = 0;
+  float response = 0;
+};
+
+// A rectangle of the detection region [x0, x1) x [y0, y1) and the corners inside it.
+struct QuadNode {
+  float x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+  std::vector<int> members;
+
+  bool CanSplit() const {
+    // A node smaller than half a pixel both ways holds one integer position at most;
+    // the guard only matters for duplicate positions, which splitting cannot separate.
+    return members.size() > 1 && (x1 - x0 >= 0.5f || y1 - y0 >= 0.5f);
+  }
+};
+
+void SplitNode(const QuadNode& node, const std::vector<Corner>& corners,
+               std::vector<QuadNode>* children) {
+  const float mx = 0.5f * (node.x0 + node.x1);
+  const float my = 0.5f * (node.y0 + node.y1);
+  QuadNode quadrants[4] = {{node.x0, node.y0, mx, my, {}},
+                           {mx, node.y0, node.x1, my, {}},
+                           {node.x0, my, mx, node.y1, {}},
+                           {mx, my, node.x1, node.y1, {}}};
+  for (int index : node.members) {
+    const Corner& c = corners[index];
+    quadrants[(c.x >= mx ? 1 : 0) + (c.y >= my ? 2 : 0)].members.push_back(index);
+  }
+  for (QuadNode& q : quadrants) {
+    if (!q.members.empty()) children->push_back(std::move(q));
+  }
+}
+
+// Indices of at most `budget` corners: the quadtree is refined (every splittable node per
+// round, the most crowded first once a full round could overshoot) until it has `budget`
+// non-empty leaves, and each leaf keeps its strongest corner. Sparse areas thus keep their
+// corners while dense areas keep only their best ones.
+std::vector<int> DistributeByQuadtree(const std::vector<Corner>& corners, float x0, float y0,
+                                      float x1, float y1, int budget) {
+  if (budget <= 0 || corners.empty()) return {};
+  // Start with near-square roots so that splits produce near-square cells.
+  const int num_roots = std::max(1, static_cast<int>(std::lround((x1 - x0) / (y1 - y0))));
+  const float root_width = (x1 - x0) / num_roots;
+  std::vector<QuadNode> roots(num_roots);
+  for (int r = 0; r < num_roots; ++r) {
+    roots[r] = {x0 + r * root_width, y0, x0 + (r + 1) * root_width, y1, {}};
+  }
+  for (int i = 0; i < static_cast<int>(corners.size()); ++i) {
+    const int r = std::min(num_roots - 1, static_cast<int>((corners[i].x - x0) / root_width));
+    roots[std::max(0, r)].members.push_back(i);
+  }
+  std::vector<QuadNode> nodes;
+  for (QuadNode& root : roots) {
+    if (!root.members.empty()) nodes.push_back(std::move(root));
+  }
+
+  while (static_cast<int>(nodes.size()) < budget) {
+    std::vector<int> splittable;
+    for (int n = 0; n < static_cast<int>(nodes.size()); ++n) {
+      if (nodes[n].CanSplit()) splittable.push_back(n);
+    }
+    if (splittable.empty()) break;
+    const bool split_all = static_cast<int>(nodes.size() + 3 * splittable.size()) <= budget;
+    if (!split_all) {
+      std::stable_sort(splittable.begin(), splittable.end(), [&nodes](int a, int b) {
+        return nodes[a].members.size() > nodes[b].members.size();
+      });
+    }
+    std::vector<bool> was_split(nodes.size(), false);
+    std::vector<QuadNode> children;
+    int node_count = static_cast<int>(nodes.size());
+    for (int n : splittable) {
+      const size_t before = children.size();
+      SplitNode(nodes[n], corners, &children);
+      was_split[n] = true;
+      node_count += static_cast<int>(children.size() - before) - 1;
+      if (!split_all && node_count >= budget) break;
+    }
+    std::vector<QuadNode> next;
+    next.reserve(node_count);
+    for (size_t n = 0; n < nodes.size(); ++n) {
+      if (!was_split[n]) next.push_back(std::move(nodes[n]));
+    }
+    for (QuadNode& child : children) next.push_back(std::move(child));
+    nodes = std::move(next);
+  }
+
+  std::vector<int> selected;
+  selected.reserve(nodes.size());
+  for (const QuadNode& node : nodes) {
+    selected.push_back(*std::max_element(
+        node.members.begin(), node.members.end(),
+        [&corners](int a, int b) { return corners[a].response < corners[b].response; }));
+  }
+  if (static_cast<int>(selected.size()) > budget) {
+    // The last split round can overshoot by up to 3 leaves.
+    std::nth_element(
+        selected.begin(), selected.begin() + budget, selected.end(),
+        [&corners](int a, int b) { return corners[a].response > corners[b].response; });
+    selected.resize(budget);
+  }
+  std::sort(selected.begin(), selected.end());  // deterministic, row-major order
+  return selected;
+}
+
+void AppendFastCorners(const cv::Mat& level_image, const cv::Rect& window, int threshold,
+                       const cv::Rect& keep, std::vector<Corner>* corners) {
+  std::vector<cv::KeyPoint> found;
+  cv::FAST(level_image(window), found, threshold, /*nonmaxSuppression=*/true);
+  for (const cv::KeyPoint& k : found) {
+    const int x = cvRound(k.pt.x) + window.x;
+    const int y = cvRound(k.pt.y) + window.y;
+    if (keep.contains({x, y})) corners->push_back({x, y, k.response});
+  }
+}
+
+// FAST corners of one level inside `region`, found with the initial threshold over the
+// whole region and again with the minimum threshold in each grid cell left empty.
+std::vector<Corner> DetectCornersInCells(const cv::Mat& level_image, const cv::Rect& region,
+                                         const OrbExtractorOptions& options) {
+  std::vector<Corner> corners;
+  const cv::Rect fast_window(region.x - kFastRadiusPx, region.y - kFastRadiusPx,
+                             region.width + 2 * kFastRadiusPx, region.height + 2 * kFastRadiusPx);
+  AppendFastCorners(level_image, fast_window, options.initial_fast_threshold, region, &corners);
+  if (options.min_fast_threshold >= options.initial_fast_threshold) return corners;
+
+  const int cols = std::max(1, region.width / options.cell_size_px);
+  const int rows = std::max(1, region.height / options.cell_size_px);
+  auto cell_edge = [](int origin, int extent, int cells, int i) {
+    return origin + static_cast<int>(static_cast<long>(extent) * i / cells);
+  };
+  std::vector<int> count(static_cast<size_t>(cols) * rows, 0);
+  for (const Corner& c : corners) {
+    // Inverse of cell_edge: the cell whose integer range [edge(i), edge(i+1)) holds c.
+    int col = static_cast<int>(static_cast<long>(c.x - region.x) * cols / region.width);
+    int row = static_cast<int>(static_cast<long>(c.y - region.y) * rows / region.height);
+    while (col + 1 < cols && c.x >= cell_edge(region.x, region.width, cols, col + 1)) ++col;
+    while (col > 0 && c.x < cell_edge(region.x, region.width, cols, col)) --col;
+    while (row + 1 < rows && c.y >= cell_edge(region.y, region.height, rows, row + 1)) ++row;
+    while (row > 0 && c.y < cell_edge(region.y, region.height, rows, row)) --row;
+    ++count[static_cast<size_t>(row) * cols + col];
+  }
+  for (int row = 0; row < rows; ++row) {
+    for (int col = 0; col < cols; ++col) {
+      if (count[static_cast<size_t>(row) * cols + col] > 0) continue;
+      const int cx0 = cell_edge(region.x, region.width, cols, col);
+      const int cx1 = cell_edge(region.x, region.width, cols, col + 1);
+      const int cy0 = cell_edge(region.y, region.height, rows, row);
+      const int cy1 = cell_edge(region.y, region.height, rows, row + 1);
+      const cv::Rect cell(cx0, cy0, cx1 - cx0, cy1 - cy0);
+      const cv::Rect window(cx0 - kFastRadiusPx, cy0 - kFastRadiusPx,
+                            cell.width + 2 * kFastRadiusPx, cell.height + 2 * kFastRadiusPx);
+      AppendFastCorners(level_image, window, options.min_fast_threshold, cell, &corners);
+    }
+  }
+  return corners;
+}
+
+// Orientation of the patch around (x, y) as the direction from its centre to its
+// intensity centroid, in degrees [0, 360).
+float IntensityCentroidAngle(const cv::Mat& image, int x, int y,
+                             const std::vector<int>& half_widths) {
+  const uchar* centre = image.ptr<uchar>(y) + x;
+  const int step = static_cast<int>(image.step1());
+  int m10 = 0;
+  int m01 = 0;
+  for (int u = -kOrientationRadiusPx; u <= kOrientationRadiusPx; ++u) m10 += u * centre[u];
+  // Rows v and -v together: their x moments add, their y moments subtract.
+  for (int v = 1; v <= kOrientationRadiusPx; ++v) {
+    const int w = half_widths[v];
+    const uchar* below = centre + v * step;
+    const uchar* above = centre - v * step;
+    int row_difference = 0;
+    for (int u = -w; u <= w; ++u) {
+      row_difference += below[u] - above[u];
+      m10 += u * (below[u] + above[u]);
+    }
+    m01 += v * row_difference;
+  }
+  return cv::fastAtan2(static_cast<float>(m01), static_cast<float>(m10));
+}
+
+void ValidateOptions(const OrbExtractorOptions& o) {
+  auto fail = [](const std::string& what) { throw Error("OrbExtractorOptions: " + what); };
+  if (o.max_features < 1) fail(fmt::format("max_features must be >= 1, got {}", o.max_features));
+  if (!(o.scale_factor > 1.0f) || !std::isfinite(o.scale_factor)) {
+    fail(fmt::format("scale_factor must be > 1, got {}", o.scale_factor));
+  }
+  if (o.levels < 1 || o.levels > 32) fail(fmt::format("levels must be 1..32, got {}", o.levels));
+  if (o.initial_fast_threshold < 1 || o.initial_fast_threshold > 254 || o.min_fast_threshold < 1 ||
+      o.min_fast_threshold > o.initial_fast_threshold) {
+    fail(fmt::format("need 1 <= min_fast_threshold ({}) <= initial_fast_threshold ({}) <= 254",
+                     o.min_fast_threshold, o.initial_fast_threshold));
+  }
+  if (o.cell_size_px < 8) fail(fmt::format("cell_size_px must be >= 8, got {}", o.cell_size_px));
+  if (!(o.min_depth_m >= 0) || !(o.max_depth_m > o.min_depth_m)) {
+    fail(
+        fmt::format("need 0 <= min_depth_m ({}) < max_depth_m ({})", o.min_depth_m, o.max_depth_m));
+  }
+}
+
+}  // namespace
+
+OrbExtractor::OrbExtractor(const OrbExtractorOptions& options) : options_(options) {
+  ValidateOptions(options_);
+  const int levels = options_.levels;
+  scale_factors_.resize(levels);
+  level_sigma2_.resize(levels);
+  inverse_level_sigma2_.resize(levels);
+  for (int l = 0; l < levels; ++l) {
+    scale_factors_[l] = static_cast<float>(std::pow(static_cast<double>(options_.scale_factor), l));
+    level_sigma2_[l] = scale_factors_[l] * scale_factors_[l];
+    inverse_level_sigma2_[l] = 1.0f / level_sigma2_[l];
+  }
+
+  // Budgets proportional to 1/scale^level (ORB-SLAM2's choice: in proportion to the level's
+  // side length, not its area, which would starve the coarse levels).
+  const double ratio = 1.0 / options_.scale_factor;
+  const double first = options_.max_features * (1.0 - ratio) / (1.0 - std::pow(ratio, levels));
+  features_per_level_.resize(levels);
+  int assigned = 0;
+  for (int l = 0; l + 1 < levels; ++l) {
+    features_per_level_[l] = static_cast<int>(std::lround(first * std::pow(ratio, l)));
+    assigned += features_per_level_[l];
+  }
+  features_per_level_[levels - 1] = std::max(0, options_.max_features - assigned);
+
+  circle_half_widths_.resize(kOrientationRadiusPx + 1);
+  for (int v = 0; v <= kOrientationRadiusPx; ++v) {
+    circle_half_widths_[v] = static_cast<int>(std::lround(
+        std::sqrt(static_cast<double>(kOrientationRadiusPx * kOrientationRadiusPx - v * v))));
+  }
+}
+
+FrameFeatures OrbExtractor::Extract(const cv::Mat& gray, const cv::Mat& depth_m,
+                                    const PinholeCamera& camera) const {
+  std::string reason;
+  if (!camera.IsValid(&reason)) throw Error("OrbExtractor::Extract: invalid camera: " + reason);
+  if (gray.empty() || gray.type() != CV_8UC1) {
+    throw Error(fmt::format("OrbExtractor::Extract: image must be non-empty CV_8UC1, got type {}",
+                            gray.empty() ? "empty" : cv::typeToString(gray.type())));
+  }
+  if (gray.cols != camera.width || gray.rows != camera.height) {
+    throw Error(fmt::format("OrbExtractor::Extract: image is {}x{} but the camera is {}x{}",
+                            gray.cols, gray.rows, camera.width, camera.height));
+  }
+  if (!depth_m.empty()) {
+    if (depth_m.type() != CV_32FC1) {
+      throw Error(fmt::format("OrbExtractor::Extract: depth must be CV_32FC1 metres, got {}",
+                              cv::typeToString(depth_m.type())));
+    }
+    if (depth_m.size() != gray.size()) {
+      throw Error(fmt::format("OrbExtractor::Extract: depth is {}x{} but the image is {}x{}",
+                              depth_m.cols, depth_m.rows, gray.cols, gray.rows));
+    }
+  }
+
+  FrameFeatures features;
+  std::vector<cv::Mat> level_descriptors;
+  cv::Mat level_image = gray;
+  // One instance per call: cv::ORB's compute is not documented as thread-safe.
+  const cv::Ptr<cv::ORB> orb =
+      cv::ORB::create(options_.max_features, options_.scale_factor, 1, kBorderPx, 0, 2,
+                      cv::ORB::HARRIS_SCORE, kPatchSizePx, options_.initial_fast_threshold);
+  for (int level = 0; level < options_.levels; ++level) {
+    if (level > 0) {
+      const cv::Size size(cvRound(gray.cols / scale_factors_[level]),
+                          cvRound(gray.rows / scale_factors_[level]));
+      if (size.width <= 2 * kBorderPx || size.height <= 2 * kBorderPx) break;
+      cv::Mat next;
+      cv::resize(level_image, next, size, 0, 0, cv::INTER_LINEAR);
+      level_image = next;
+    }
+    const cv::Rect region(kBorderPx, kBorderPx, level_image.cols - 2 * kBorderPx,
+                          level_image.rows - 2 * kBorderPx);
+    if (region.width <= 0 || region.height <= 0) break;
+
+    const std::vector<Corner> corners = DetectCornersInCells(level_image, region, options_);
+    const std::vector<int> selected = DistributeByQuadtree(
+        corners, static_cast<float>(region.x), static_cast<float>(region.y),
+        static_cast<float>(region.x + region.width), static_cast<float>(region.y + region.height),
+        features_per_level_[level]);
+    if (selected.empty()) continue;
+
+    std::vector<cv::KeyPoint> level_keypoints;
+    level_keypoints.reserve(selected.size());
+    for (int index : selected) {
+      const Corner& c = corners[index];
+      level_keypoints.emplace_back(
+          cv::Point2f(static_cast<float>(c.x), static_cast<float>(c.y)),
+          static_cast<float>(kPatchSizePx),
+          IntensityCentroidAngle(level_image, c.x, c.y, circle_half_widths_), c.response, 0);
+    }
+    cv::Mat descriptors;
+    orb->compute(level_image, level_keypoints, descriptors);
+    if (level_keypoints.size() != selected.size() ||
+        descriptors.rows != static_cast<int>(selected.size())) {
+      // Cannot happen while kBorderPx matches cv::ORB's edge threshold; a silent
+      // keypoint/descriptor mismatch would corrupt every match downstream.
+      throw Error("OrbExtractor::Extract: cv::ORB dropped keypoints inside the border");
+    }
+
+    // Centre-aligned resizing maps level pixel x to level-0 pixel (x + 0.5) * W / W_l - 0.5.
+    const float to_level0_x = static_cast<float>(gray.cols) / level_image.cols;
+    const float to_level0_y = static_cast<float>(gray.rows) / level_image.rows;
+    for (cv::KeyPoint& k : level_keypoints) {
+      k.pt.x = (k.pt.x + 0.5f) * to_level0_x - 0.5f;
+      k.pt.y = (k.pt.y + 0.5f) * to_level0_y - 0.5f;
+      k.size = kPatchSizePx * scale_factors_[level];
+      k.octave = level;
+      features.keypoints.push_back(k);
+    }
+    level_descriptors.push_back(descriptors);
+  }
+
+  if (level_descriptors.empty()) {
+    features.descriptors.create(0, 32, CV_8U);
+  } else {
+    cv::vconcat(level_descriptors, features.descriptors);
+  }
+
+  const size_t n = features.keypoints.size();
+  features.depth_m.assign(n, 0.0f);
+  features.points_cam.assign(n, Eigen::Vector3d::Zero());
+  if (!depth_m.empty()) {
+    for (size_t i = 0; i < n; ++i) {
+      const cv::Point2f& pt = features.keypoints[i].pt;
+      const int x = std::clamp(cvRound(pt.x), 0, depth_m.cols - 1);
+      const int y = std::clamp(cvRound(pt.y), 0, depth_m.rows - 1);
+      const float d = depth_m.at<float>(y, x);
+      // The comparisons are false for NaN, which thus counts as missing.
+      if (d >= options_.min_depth_m && d <= options_.max_depth_m) {
+        features.depth_m[i] = d;
+        features.points_cam[i] = camera.BackProject(Eigen::Vector2d(pt.x, pt.y), d);
+      }
+    }
+  }
+  return features;
+}
+
+}  // namespace segslam::slam

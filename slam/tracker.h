@@ -1,0 +1,203 @@
+// Instance-aware RGB-D tracking (paper section III.B-C on ORB-SLAM2's RGB-D design;
+// DESIGN.md "The core", steps 1, 3, 4, 5).
+//
+// Per frame the mutual loop calls, in order:
+//   BeginFrame(frame)               ORB features with depth
+//   EstimateCoarsePose()            T_c(t) from all features (step 1)
+//   JudgeInstances(instances)       split into A and B_i, moving/static per instance (step 3)
+//   EstimateFinePose()              T_f(t) from A and the static B_s only (step 4)
+//   UpdateMaps()                    keyframes, new points, local BA (step 5)
+// Track() runs the whole sequence of calls for one of the three modes.
+//
+// Tracking (EstimateCoarsePose): constant-velocity prediction and projection matching
+// against the last frame, else descriptor matching against the reference keyframe with
+// RANSAC PnP, then projection matching against the local map (every map point whose
+// frustum, scale range, viewing angle and depth-occlusion test admit it), each followed
+// by robust pose optimisation (slam/pose_optimizer.h). When that fails the frame is lost
+// and the tracker relocalizes against all map points (descriptor search, RANSAC PnP).
+//
+// Localization (the paper's second pass): LoadLongTermMap() makes the loaded points
+// fixed; the first frame is relocalized against them, tracking matches them like any
+// point, and new points go to the tracking map only (see slam/map.h).
+//
+// Everything runs on the calling thread, so results are deterministic; local bundle
+// adjustment runs inside UpdateMaps() and is timed separately.
+#pragma once
+
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <optional>
+#include <string>
+#include <unordered_set>
+#include <vector>
+
+#include <Eigen/Geometry>
+#include <opencv2/core/mat.hpp>
+
+#include "core/camera.h"
+#include "core/frame.h"
+#include "slam/map.h"
+#include "slam/map_file.h"
+#include "slam/orb_extractor.h"
+
+namespace segslam::slam {
+
+// The three systems the bench compares (DESIGN.md "Baselines").
+enum class SlamMode {
+  kPlain,         // no masks at all (ORB-SLAM2-like)
+  kMaskMoveable,  // every feature on a moveable-class instance dropped (DynaSLAM-like)
+  kMutual,        // the paper: moving/static judgement per instance
+};
+std::string ToString(SlamMode mode);
+// Throws segslam::Error listing the valid names.
+SlamMode ParseSlamMode(const std::string& name);
+
+enum class TrackingStatus { kTracking, kRelocalized, kLost };
+std::string ToString(TrackingStatus status);
+
+// Instance masks of one frame as slam/ needs them: ids per pixel and which ids are of a
+// moveable class. (slam/ does not depend on seg/; mutual/ converts.)
+struct FrameInstances {
+  cv::Mat ids;                                   // CV_16U, frame-sized, 0 = background
+  std::unordered_set<std::uint16_t> moveable_ids;
+};
+
+struct InstanceJudgement {
+  std::uint16_t id = 0;
+  bool moveable_class = false;
+  bool judged = false;          // enough evidence (see TrackerOptions::min_points_to_judge)
+  bool moving = false;
+  int num_features = 0;         // features of this instance in the frame
+  int num_points = 0;           // features with a motion measurement
+  int num_moving_points = 0;
+  double moving_share = 0;      // num_moving_points / num_points
+};
+
+struct FrameTimings {
+  double features_ms = 0;
+  double coarse_ms = 0;
+  double judge_ms = 0;
+  double fine_ms = 0;
+  double map_update_ms = 0;     // keyframe decision, new points, culling (no BA)
+  double bundle_adjustment_ms = 0;
+  double TrackingMs() const { return features_ms + coarse_ms + judge_ms + fine_ms + map_update_ms; }
+};
+
+struct FrameResult {
+  int frame_index = 0;
+  double stamp_s = 0;
+  TrackingStatus status = TrackingStatus::kLost;
+  Eigen::Isometry3d T_wc_coarse = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d T_wc = Eigen::Isometry3d::Identity();  // fine; meaningless if lost
+  int num_features = 0;
+  int num_features_with_depth = 0;
+  int num_coarse_inliers = 0;
+  int num_fine_inliers = 0;
+  bool keyframe = false;
+  std::vector<InstanceJudgement> instances;
+  FrameTimings timings;
+  bool localized() const { return status != TrackingStatus::kLost; }
+};
+
+struct TrackerOptions {
+  OrbExtractorOptions orb;
+  // Depth enters the optimisation as ORB-SLAM2's "virtual stereo" coordinate
+  // u_r = u - bf / depth. A disparity bf / z with one pixel of noise means a depth noise
+  // of z^2 / bf, so bf = 1 / depth_sigma_at_1m weighs depth as the sensor measures it
+  // (Kinect: about 1.5 mm at 1 m, growing with z^2). ORB-SLAM2's fixed 8 cm baseline
+  // (bf ~ 40) trusts Kinect depth ~15 times less than it deserves, which lets bundle
+  // adjustment slide points along their rays.
+  double depth_sigma_at_1m = 0.0015;
+  // Points are created only up to this depth; farther depth is too noisy to map.
+  float max_point_depth_m = 40.0f;
+  // Matching: Hamming distance limits (of 256 bits) and the nearest/second ratio.
+  int max_descriptor_distance = 100;
+  int strict_descriptor_distance = 50;
+  float projection_ratio = 0.8f;
+  float relocalization_ratio = 0.8f;
+  // Projection search radii in pixels at pyramid level 0.
+  double last_frame_radius_px = 7;
+  double local_map_radius_px = 3;
+  // A tracked frame needs this many inliers after local-map tracking (more right after a
+  // relocalization, as ORB-SLAM, so a wrong relocalization does not stick).
+  int min_tracking_inliers = 30;
+  int min_relocalization_inliers = 50;
+  // Keyframes (ORB-SLAM2 RGB-D rules): a new one when the tracked inliers fall below
+  // this share of the reference keyframe's points, or too few close points are tracked,
+  // or after max_frames_between_keyframes.
+  double keyframe_tracked_ratio = 0.75;
+  int max_frames_between_keyframes = 30;
+  // Depth under which a point counts as "close" (accurately measured); 0 = take the
+  // median feature depth of the first frame, clamped to [3, 25] m.
+  double close_depth_m = 0;
+  // Local bundle adjustment over the latest keyframes.
+  bool local_bundle_adjustment = true;
+  int local_ba_keyframes = 7;
+  // Instance judgement (step 3): a feature is moving when its 3-D position disagrees
+  // with its match (map point, or the same instance's feature some frames back) by more
+  // than moving_distance_m + moving_distance_per_m * depth; without depth, when its
+  // reprojection error exceeds moving_reprojection_px (times the level's scale).
+  double moving_distance_m = 0.10;
+  double moving_distance_per_m = 0.01;
+  double moving_reprojection_px = 6.0;
+  int motion_baseline_frames = 5;
+  // An instance with at least min_points_to_judge measured features is moving when at
+  // least moving_share_threshold of them move.
+  int min_points_to_judge = 4;
+  double moving_share_threshold = 0.3;
+  // Long-term map export: points seen in at least this many keyframes.
+  int long_term_min_observations = 2;
+  // Pose of the first frame when no map is loaded (the map's frame).
+  Eigen::Isometry3d initial_T_wc = Eigen::Isometry3d::Identity();
+};
+
+class Tracker {
+ public:
+  Tracker(const PinholeCamera& camera, const TrackerOptions& options = {});
+  ~Tracker();
+  Tracker(const Tracker&) = delete;
+  Tracker& operator=(const Tracker&) = delete;
+
+  // Localization mode: `map`'s points become fixed points of the map. Throws
+  // segslam::Error if the map was built with another camera.
+  void LoadLongTermMap(const LongTermMapData& map, const std::string& origin);
+
+  // --- The per-frame steps, in this order. ---
+  // Throws segslam::Error if the frame's images have the wrong type or size.
+  void BeginFrame(const RgbdFrame& frame);
+  // Drops features on moveable-class instances (mask-moveable mode), before the coarse pose.
+  void DropMoveableFeatures(const FrameInstances& instances);
+  // Step 1. Returns the coarse T_wc, or nullopt when the frame cannot be tracked or
+  // relocalized (then the frame is lost and the later steps only record that).
+  std::optional<Eigen::Isometry3d> EstimateCoarsePose();
+  // Step 3 with the refined masks of this frame.
+  std::vector<InstanceJudgement> JudgeInstances(const FrameInstances& instances);
+  // Step 4. Without JudgeInstances it equals the coarse pose.
+  std::optional<Eigen::Isometry3d> EstimateFinePose();
+  // Step 5; returns the frame's result (timings, status, judgements).
+  FrameResult UpdateMaps();
+
+  // All steps for `mode`; `instances` may be null for kPlain and is required otherwise.
+  FrameResult Track(const RgbdFrame& frame, const FrameInstances* instances, SlamMode mode);
+
+  // The long-term map (DESIGN.md core step 5): background points, or every point for
+  // `include_instances` (the plain baseline). In localization mode: the loaded map as is.
+  LongTermMapData ExportLongTermMap(bool include_instances) const;
+
+  const Map& map() const { return *map_; }
+  const PinholeCamera& camera() const { return camera_; }
+  const TrackerOptions& options() const { return options_; }
+  bool localization_mode() const { return localization_mode_; }
+
+ private:
+  struct Impl;
+  PinholeCamera camera_;
+  TrackerOptions options_;
+  std::unique_ptr<Map> map_;
+  std::unique_ptr<Impl> impl_;
+  bool localization_mode_ = false;
+  std::optional<LongTermMapData> loaded_map_;
+};
+
+}  // namespace segslam::slam

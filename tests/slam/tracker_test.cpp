@@ -1,0 +1,226 @@
+// The tracker on ray-cast frames with exact poses (tests/slam/synthetic_room.h): the
+// first frame is given its true pose, so every estimate is compared in the world frame
+// without alignment.
+#include "slam/tracker.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/error.h"
+#include "tests/slam/synthetic_room.h"
+
+namespace segslam::slam {
+namespace {
+
+using testing::BoxQuads;
+using testing::LookingAlongX;
+using testing::RenderQuads;
+using testing::RoomQuads;
+
+PinholeCamera TestCamera() { return PinholeCamera::FromVerticalFov(640, 480, 50); }
+
+// A smooth hand-held-like path: forward/sideways drift and a slow yaw oscillation.
+Eigen::Isometry3d PathPose(int i) {
+  const double t = i / 30.0;
+  return LookingAlongX(Eigen::Vector3d(-2.0 + 0.25 * t, 0.3 * std::sin(1.3 * t), 1.4 + 0.05 * std::sin(2 * t)),
+                       0.25 * std::sin(0.9 * t));
+}
+
+double PositionError(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+  return (a.translation() - b.translation()).norm();
+}
+
+double AngleErrorDeg(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+  return Eigen::AngleAxisd(a.linear().transpose() * b.linear()).angle() * 180.0 / M_PI;
+}
+
+TrackerOptions StartingAt(const Eigen::Isometry3d& T_wc) {
+  TrackerOptions options;
+  options.initial_T_wc = T_wc;
+  return options;
+}
+
+TEST(TrackerTest, FollowsAKnownPathInATexturedRoom) {
+  const PinholeCamera camera = TestCamera();
+  const auto room = RoomQuads(1);
+  Tracker tracker(camera, StartingAt(PathPose(0)));
+  double worst_m = 0, worst_deg = 0;
+  int keyframes = 0;
+  for (int i = 0; i < 45; ++i) {
+    const auto rendered = RenderQuads(room, camera, PathPose(i), i, i / 30.0);
+    const FrameResult result = tracker.Track(rendered.frame, nullptr, SlamMode::kPlain);
+    ASSERT_TRUE(result.localized()) << "frame " << i;
+    worst_m = std::max(worst_m, PositionError(result.T_wc, PathPose(i)));
+    worst_deg = std::max(worst_deg, AngleErrorDeg(result.T_wc, PathPose(i)));
+    keyframes += result.keyframe;
+    EXPECT_GT(result.num_features, 500);
+  }
+  EXPECT_LT(worst_m, 0.01);
+  EXPECT_LT(worst_deg, 0.3);
+  EXPECT_GE(keyframes, 2);
+}
+
+TEST(TrackerTest, BlankWallIsLostWithoutCrashing) {
+  const PinholeCamera camera = TestCamera();
+  Tracker tracker(camera);
+  RgbdFrame frame;
+  frame.color_bgr = cv::Mat(camera.height, camera.width, CV_8UC3, cv::Scalar::all(128));
+  frame.depth_m = cv::Mat(camera.height, camera.width, CV_32F, cv::Scalar(2.0f));
+  for (int i = 0; i < 3; ++i) {
+    frame.index = i;
+    frame.stamp_s = i;
+    const FrameResult result = tracker.Track(frame, nullptr, SlamMode::kPlain);
+    EXPECT_EQ(result.status, TrackingStatus::kLost);
+    EXPECT_EQ(result.num_features, 0);
+  }
+}
+
+TEST(TrackerTest, FramesWithoutDepthCannotStartAMap) {
+  const PinholeCamera camera = TestCamera();
+  const auto room = RoomQuads(2);
+  Tracker tracker(camera);
+  for (int i = 0; i < 3; ++i) {
+    auto rendered = RenderQuads(room, camera, PathPose(i), i, i / 30.0);
+    rendered.frame.depth_m.setTo(0);
+    const FrameResult result = tracker.Track(rendered.frame, nullptr, SlamMode::kPlain);
+    EXPECT_EQ(result.status, TrackingStatus::kLost);
+    EXPECT_EQ(result.num_features_with_depth, 0);
+    EXPECT_GT(result.num_features, 500);
+  }
+  EXPECT_TRUE(tracker.map().points().empty());
+}
+
+TEST(TrackerTest, WrongImageTypesAreErrors) {
+  const PinholeCamera camera = TestCamera();
+  Tracker tracker(camera);
+  RgbdFrame frame;
+  frame.color_bgr = cv::Mat(240, 320, CV_8UC3, cv::Scalar::all(0));
+  EXPECT_THROW(tracker.Track(frame, nullptr, SlamMode::kPlain), Error);
+  frame.color_bgr = cv::Mat(camera.height, camera.width, CV_8UC3, cv::Scalar::all(0));
+  frame.depth_m = cv::Mat(camera.height, camera.width, CV_16U, cv::Scalar(0));
+  EXPECT_THROW(tracker.Track(frame, nullptr, SlamMode::kPlain), Error);
+  frame.depth_m.release();
+  EXPECT_THROW(tracker.Track(frame, nullptr, SlamMode::kMutual), Error);  // needs masks
+}
+
+TEST(TrackerTest, RelocalizesAfterLosingTrack) {
+  const PinholeCamera camera = TestCamera();
+  const auto room = RoomQuads(3);
+  Tracker tracker(camera, StartingAt(PathPose(0)));
+  for (int i = 0; i < 20; ++i) {
+    ASSERT_TRUE(tracker.Track(RenderQuads(room, camera, PathPose(i), i, i / 30.0).frame, nullptr, SlamMode::kPlain)
+                    .localized());
+  }
+  // The camera is covered for a few frames, then shows up again elsewhere on the path.
+  RgbdFrame covered;
+  covered.color_bgr = cv::Mat(camera.height, camera.width, CV_8UC3, cv::Scalar::all(20));
+  covered.depth_m = cv::Mat(camera.height, camera.width, CV_32F, cv::Scalar(0.0f));
+  for (int i = 20; i < 23; ++i) {
+    covered.index = i;
+    covered.stamp_s = i / 30.0;
+    EXPECT_EQ(tracker.Track(covered, nullptr, SlamMode::kPlain).status, TrackingStatus::kLost);
+  }
+  const FrameResult back = tracker.Track(RenderQuads(room, camera, PathPose(10), 23, 23 / 30.0).frame, nullptr,
+                                         SlamMode::kPlain);
+  EXPECT_EQ(back.status, TrackingStatus::kRelocalized);
+  EXPECT_LT(PositionError(back.T_wc, PathPose(10)), 0.01);
+  EXPECT_LT(AngleErrorDeg(back.T_wc, PathPose(10)), 0.3);
+  const FrameResult next = tracker.Track(RenderQuads(room, camera, PathPose(11), 24, 24 / 30.0).frame, nullptr,
+                                         SlamMode::kPlain);
+  EXPECT_EQ(next.status, TrackingStatus::kTracking);
+}
+
+TEST(TrackerTest, LocalizesOnALoadedLongTermMapWithoutChangingIt) {
+  const PinholeCamera camera = TestCamera();
+  const auto room = RoomQuads(4);
+  Tracker mapper(camera, StartingAt(PathPose(0)));
+  for (int i = 0; i < 30; ++i) mapper.Track(RenderQuads(room, camera, PathPose(i), i, i / 30.0).frame, nullptr, SlamMode::kPlain);
+  const LongTermMapData map = mapper.ExportLongTermMap(true);
+  ASSERT_GT(map.points.size(), 500u);
+
+  // A second visit, 10 cm to the side, starting with no pose at all.
+  const Eigen::Translation3d offset(0, 0.1, 0);
+  Tracker localizer(camera);
+  localizer.LoadLongTermMap(map, "test map");
+  for (int i = 0; i < 20; ++i) {
+    const Eigen::Isometry3d truth = offset * PathPose(i);
+    const FrameResult result =
+        localizer.Track(RenderQuads(room, camera, truth, i, i / 30.0).frame, nullptr, SlamMode::kPlain);
+    ASSERT_TRUE(result.localized()) << "frame " << i;
+    if (i == 0) {
+      EXPECT_EQ(result.status, TrackingStatus::kRelocalized);
+    }
+    EXPECT_LT(PositionError(result.T_wc, truth), 0.01) << "frame " << i;
+  }
+  EXPECT_EQ(localizer.ExportLongTermMap(true).points.size(), map.points.size());
+}
+
+TEST(TrackerTest, MapFromAnotherCameraIsRefused) {
+  LongTermMapData map;
+  map.camera = PinholeCamera::FromVerticalFov(320, 240, 50);
+  Tracker tracker(TestCamera());
+  EXPECT_THROW(tracker.LoadLongTermMap(map, "other.segslam"), Error);
+}
+
+// A box slides through the room while the camera moves: mutual judges it moving and
+// keeps its points out of the map; a box that stays put is judged static and mapped.
+TEST(TrackerTest, MutualJudgesAMovingBoxMovingAndAStillBoxStatic) {
+  const PinholeCamera camera = TestCamera();
+  const auto room = RoomQuads(5);
+  const auto still_box = BoxQuads({1.0, -1.6, 0.0}, {1.8, -0.8, 1.0}, 77, 2);
+  FrameInstances instances;
+  instances.moveable_ids = {1, 2};
+  Tracker tracker(camera, StartingAt(PathPose(0)));
+  int moving_judgements = 0, static_judgements = 0, judged_frames_moving = 0, judged_frames_still = 0;
+  double worst_m = 0, sum_squared_m2 = 0;
+  for (int i = 0; i < 40; ++i) {
+    // 1.5 m/s across the view, as a walking person.
+    const double y = -0.2 + 1.5 * i / 30.0 - 0.6;
+    auto quads = room;
+    const auto moving_box = BoxQuads({1.2, y, 0.0}, {1.8, y + 0.6, 1.6}, 99, 1);
+    quads.insert(quads.end(), moving_box.begin(), moving_box.end());
+    quads.insert(quads.end(), still_box.begin(), still_box.end());
+    const auto rendered = RenderQuads(quads, camera, PathPose(i), i, i / 30.0);
+    instances.ids = rendered.instance_ids;
+    const FrameResult result = tracker.Track(rendered.frame, &instances, SlamMode::kMutual);
+    ASSERT_TRUE(result.localized()) << "frame " << i;
+    worst_m = std::max(worst_m, PositionError(result.T_wc, PathPose(i)));
+    sum_squared_m2 += std::pow(PositionError(result.T_wc, PathPose(i)), 2);
+    for (const InstanceJudgement& judgement : result.instances) {
+      if (!judgement.judged) continue;
+      if (judgement.id == 1) {
+        ++judged_frames_moving;
+        moving_judgements += judgement.moving;
+      } else if (judgement.id == 2) {
+        ++judged_frames_still;
+        static_judgements += !judgement.moving;
+      }
+    }
+  }
+  EXPECT_GT(judged_frames_moving, 20);
+  EXPECT_GE(moving_judgements, 0.9 * judged_frames_moving);
+  EXPECT_GT(judged_frames_still, 20);
+  EXPECT_GE(static_judgements, 0.9 * judged_frames_still);
+  // The box hides up to a third of the view, so a little less accurate than the empty room.
+  EXPECT_LT(std::sqrt(sum_squared_m2 / 40), 0.01);
+  EXPECT_LT(worst_m, 0.02);
+  for (const auto& point : tracker.map().points()) {
+    if (!point->bad) {
+      EXPECT_NE(point->instance_id, 1) << "a point of the moving box is in the map";
+    }
+  }
+  const LongTermMapData long_term = tracker.ExportLongTermMap(false);
+  size_t still_box_points = 0;
+  for (const auto& point : tracker.map().points()) still_box_points += !point->bad && point->instance_id == 2;
+  EXPECT_GT(still_box_points, 0u) << "the static box belongs to the tracking map";
+  for (const StoredMapPoint& stored : long_term.points) {
+    // Long-term map: background only, so nothing inside the still box's volume.
+    const bool inside = stored.position_w.x() > 0.99 && stored.position_w.x() < 1.81 &&
+                        stored.position_w.y() > -1.61 && stored.position_w.y() < -0.79 && stored.position_w.z() < 1.01;
+    EXPECT_FALSE(inside) << stored.position_w.transpose();
+  }
+}
+
+}  // namespace
+}  // namespace segslam::slam
