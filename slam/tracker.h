@@ -138,10 +138,10 @@ struct TrackerOptions {
   // with its match (map point, or the same instance's feature some frames back) by more
   // than moving_distance_m + moving_distance_per_m * depth; without depth, when its
   // reprojection error exceeds moving_reprojection_px (times the level's scale).
-  double moving_distance_m = 0.10;
-  double moving_distance_per_m = 0.01;
+  double moving_distance_m = 0.05;
+  double moving_distance_per_m = 0.02;
   double moving_reprojection_px = 6.0;
-  int motion_baseline_frames = 5;
+  int motion_baseline_frames = 10;
   // An instance with at least min_points_to_judge measured features is moving when at
   // least moving_share_threshold of them move.
   int min_points_to_judge = 4;

@@ -11,6 +11,7 @@
 #include <filesystem>
 
 #include "core/error.h"
+#include "core/instances.h"
 
 namespace segslam::harness {
 namespace {
@@ -79,29 +80,46 @@ TEST(SlamRunTest, StaticCityTracksWithinPointThreePercentOfTheRoute) {
   EXPECT_LT(scored.ate.translation_m.rmse, 0.003 * route_m);
 }
 
-// People walking through the view: the moving/static judgement keeps them out of the
-// pose and the map, so mutual tracks at least twice as well as plain.
-TEST(SlamRunTest, MutualHalvesPlainErrorAmongWalkingPeople) {
-  const fs::path dir = kDataDir / "office_seg" / "pass1";
+// A walker comes close and covers much of the view: plain SLAM follows the walker, the
+// moving/static judgement keeps the walker out of pose and map, so mutual tracks at
+// least twice as well (the paper: 0.014 vs 0.459 m on walking_xyz), and as well as
+// dropping every person (mask-moveable), within 10%.
+TEST(SlamRunTest, MutualHalvesPlainErrorWhenAWalkerCoversTheView) {
+  const fs::path dir = kDataDir / "office_rpy" / "pass1";
   RequireDataset(dir);
   const Scored plain = RunAndScore(dir, slam::SlamMode::kPlain);
   const Scored mutual = RunAndScore(dir, slam::SlamMode::kMutual);
   const Scored masked = RunAndScore(dir, slam::SlamMode::kMaskMoveable);
   EXPECT_EQ(mutual.run.LocalizedShare(), 1.0);
   EXPECT_LE(mutual.ate.translation_m.rmse, 0.5 * plain.ate.translation_m.rmse);
-  EXPECT_LE(mutual.ate.translation_m.rmse, 1.1 * masked.ate.translation_m.rmse + 0.002);
-  // The walking people are judged moving in most frames they are measured in.
-  int moving = 0, judged = 0;
+  EXPECT_LE(mutual.ate.translation_m.rmse, 1.1 * masked.ate.translation_m.rmse + 0.001);
+  EXPECT_LT(mutual.ate.translation_m.rmse, 0.01);
+}
+
+// Walkers farther away: plain survives them (robust estimation rejects a minority of
+// moving features), and mutual must not be worse.
+TEST(SlamRunTest, MutualJudgesWalkersMovingAndTracksAsWellAsPlain) {
+  const fs::path dir = kDataDir / "office_seg" / "pass1";
+  RequireDataset(dir);
+  const Scored plain = RunAndScore(dir, slam::SlamMode::kPlain);
+  const Scored mutual = RunAndScore(dir, slam::SlamMode::kMutual);
+  EXPECT_EQ(mutual.run.LocalizedShare(), 1.0);
+  EXPECT_LE(mutual.ate.translation_m.rmse, 1.1 * plain.ate.translation_m.rmse + 0.001);
+  const InstanceTable table = InstanceTable::Read(dir / "instances.json");
+  int person_judged = 0, person_moving = 0;
   for (const auto& frame : mutual.run.frames) {
     for (const auto& instance : frame.instances) {
-      if (instance.judged && instance.moveable_class) {
-        ++judged;
-        moving += instance.moving;
-      }
+      const InstanceInfo* info = table.Find(instance.id);
+      if (info == nullptr || info->category_name != "person" || !instance.judged) continue;
+      ++person_judged;
+      person_moving += instance.moving;
     }
   }
-  std::printf("judged moveable instances: %d, of which moving %d\n", judged, moving);
-  EXPECT_GT(judged, 0);
+  std::printf("walker judgements: %d, moving %d\n", person_judged, person_moving);
+  // Walkers far away show few features: most frames leave them unjudged (and so out of
+  // pose and map, as moveable objects); those judged are mostly judged moving.
+  EXPECT_GE(person_judged, 5);
+  EXPECT_GE(person_moving, 0.7 * person_judged);
 }
 
 // The paper's second pass: pass 2 is relocalized on pass 1's long-term map and tracked

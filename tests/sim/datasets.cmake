@@ -36,3 +36,6 @@ segslam_add_test_dataset(office_seg scenarios/office_walking_xyz.yaml --frames 8
 # default sensor noise; city_static, city_seg and office_seg above serve too.
 segslam_add_test_dataset(office_static scenarios/office_walking_xyz.yaml
   --frames 90 --set office.people_walking=0)
+# Hand-held rotation with a walker who comes close and covers much of the view around
+# frame 157: there plain SLAM follows the walker.
+segslam_add_test_dataset(office_rpy scenarios/office_walking_rpy.yaml --frames 200)
