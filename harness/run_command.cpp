@@ -26,6 +26,7 @@ struct RunArgs {
   std::string map_in;
   std::string map_out;
   std::string out_dir;
+  std::string camera_file;
   int frames = 0;
   bool quiet = false;
 };
@@ -38,7 +39,9 @@ struct PassOutcome {
 PassOutcome RunPass(const RunArgs& args, const fs::path& sequence_dir, const fs::path& map_in,
                     const fs::path& map_out, const fs::path& out_dir,
                     const std::optional<Eigen::Isometry3d>& fixed_alignment) {
-  const TumSequence sequence = TumSequence::Open(sequence_dir);
+  std::optional<SequenceCamera> camera;
+  if (!args.camera_file.empty()) camera = ReadCameraYaml(args.camera_file);
+  const TumSequence sequence = TumSequence::Open(sequence_dir, camera);
   SlamRunOptions options;
   options.mode = slam::ParseSlamMode(args.mode);
   options.masks = args.masks;
@@ -133,6 +136,8 @@ void AddRunCommand(CLI::App& app, std::function<int()>* action) {
   cmd->add_option("--map-out", args->map_out, "Write the long-term map here (and a .ply beside it)");
   cmd->add_option("--out", args->out_dir, "Output folder (default DATASET/run_MODE)");
   cmd->add_option("--frames", args->frames, "Only the first N frames of each sequence (0 = all)");
+  cmd->add_option("--camera", args->camera_file,
+                  "camera.yaml to use instead of the sequence's own (for a real sequence without one)");
   cmd->add_flag("-q,--quiet", args->quiet, "No progress bar");
   cmd->callback([args, action] { *action = [args] { return RunRun(*args); }; });
 }

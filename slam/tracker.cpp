@@ -137,6 +137,37 @@ struct InstanceSnapshot {
   cv::Mat descriptors;                          // rows = stored features
 };
 
+// The 3-D displacements measured on one instance. A moving rigid object moves all its
+// points the same way; mismatches on a still one scatter. So the object moves only if
+// the component-wise median displacement, not just most single points, exceeds the
+// threshold.
+struct MotionEvidence {
+  std::vector<Eigen::Vector3d> displacements;
+  std::vector<double> thresholds;
+
+  void Add(const Eigen::Vector3d& displacement, double threshold) {
+    displacements.push_back(displacement);
+    thresholds.push_back(threshold);
+  }
+
+  // True when there are no 3-D measurements (reprojection evidence only) or when the
+  // median displacement exceeds the median threshold.
+  bool ConsensusMoves() const {
+    if (displacements.empty()) return true;
+    auto median = [](std::vector<double> values) {
+      std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+      return values[values.size() / 2];
+    };
+    Eigen::Vector3d median_displacement;
+    for (int axis = 0; axis < 3; ++axis) {
+      std::vector<double> component;
+      for (const Eigen::Vector3d& d : displacements) component.push_back(d[axis]);
+      median_displacement[axis] = median(component);
+    }
+    return median_displacement.norm() > median(thresholds);
+  }
+};
+
 struct WorkingFrame {
   int index = -1;
   double stamp_s = 0;
@@ -486,16 +517,39 @@ struct Tracker::Impl {
 
   // ---------------------------------------------------------------- judgement helpers
 
+  // A keypoint on an object's silhouette reads its depth from either side of the edge,
+  // so its 3-D position jumps between frames although nothing moved: such features
+  // give no motion evidence.
+  bool OnDepthEdge(size_t i) const {
+    const cv::KeyPoint& kp = current.features.keypoints[i];
+    const int x = static_cast<int>(std::lround(kp.pt.x));
+    const int y = static_cast<int>(std::lround(kp.pt.y));
+    const float depth = current.features.depth_m[i];
+    const int r = 2;
+    if (x < r || y < r || x >= current.depth_m.cols - r || y >= current.depth_m.rows - r) return true;
+    for (int dy = -r; dy <= r; ++dy) {
+      const float* row = current.depth_m.ptr<float>(y + dy);
+      for (int dx = -r; dx <= r; ++dx) {
+        const float d = row[x + dx];
+        if (!(d > 0) || std::abs(d - depth) > 0.05f * depth + 0.02f) return true;
+      }
+    }
+    return false;
+  }
+
   double MovingDistanceThreshold(double depth) const {
     return options.moving_distance_m + options.moving_distance_per_m * depth;
   }
 
   // +1 moving, 0 static, -1 no measurement, for feature i against map point `point`.
-  int MotionAgainstPoint(size_t i, const MapPoint* point, const Eigen::Isometry3d& T_wc) const {
+  int MotionAgainstPoint(size_t i, const MapPoint* point, const Eigen::Isometry3d& T_wc,
+                         MotionEvidence* evidence) const {
     const float depth = current.features.depth_m[i];
     if (depth > 0) {
-      const Eigen::Vector3d x_w = T_wc * current.features.points_cam[i];
-      return (x_w - point->position_w).norm() > MovingDistanceThreshold(depth) ? 1 : 0;
+      if (OnDepthEdge(i)) return -1;
+      const Eigen::Vector3d displacement = T_wc * current.features.points_cam[i] - point->position_w;
+      evidence->Add(displacement, MovingDistanceThreshold(depth));
+      return displacement.norm() > MovingDistanceThreshold(depth) ? 1 : 0;
     }
     const Eigen::Vector3d p_c = current.T_cw * point->position_w;
     if (p_c.z() <= 0) return 1;
@@ -514,7 +568,7 @@ struct Tracker::Impl {
       if (current.instance[i] == 0) continue;
       rows.push_back(static_cast<int>(i));
       snapshot.instance.push_back(current.instance[i]);
-      snapshot.point_w.push_back(current.features.depth_m[i] > 0
+      snapshot.point_w.push_back(current.features.depth_m[i] > 0 && !OnDepthEdge(i)
                                      ? Eigen::Vector3d(T_wc * current.features.points_cam[i])
                                      : Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN()));
     }
@@ -531,7 +585,7 @@ struct Tracker::Impl {
   // A "static" verdict needs the full baseline: over one frame a walker moves less than
   // the depth noise. Returns false when only a shorter baseline was available.
   bool MotionAgainstHistory(std::uint16_t id, const std::vector<int>& features, const Eigen::Isometry3d& T_wc,
-                            InstanceJudgement* judgement) const {
+                            InstanceJudgement* judgement, MotionEvidence* evidence) const {
     for (const InstanceSnapshot& snapshot : history) {  // oldest first
       const bool full_baseline = current.index - snapshot.frame_index >= options.motion_baseline_frames;
       std::vector<int> rows;
@@ -543,7 +597,9 @@ struct Tracker::Impl {
       for (size_t k = 0; k < rows.size(); ++k) snapshot.descriptors.row(rows[k]).copyTo(past.row(static_cast<int>(k)));
       std::vector<int> query_features;
       for (int i : features) {
-        if (current.features.depth_m[static_cast<size_t>(i)] > 0) query_features.push_back(i);
+        if (current.features.depth_m[static_cast<size_t>(i)] > 0 && !OnDepthEdge(static_cast<size_t>(i))) {
+          query_features.push_back(i);
+        }
       }
       if (query_features.empty()) return false;
       cv::Mat query(static_cast<int>(query_features.size()), kOrbDescriptorBytes, CV_8U);
@@ -560,7 +616,9 @@ struct Tracker::Impl {
         const Eigen::Vector3d x_w = T_wc * current.features.points_cam[i];
         const Eigen::Vector3d& past_w = snapshot.point_w[static_cast<size_t>(rows[static_cast<size_t>(pair[0].trainIdx)])];
         ++judgement->num_points;
-        if ((x_w - past_w).norm() > MovingDistanceThreshold(current.features.depth_m[i])) ++judgement->num_moving_points;
+        const double threshold = MovingDistanceThreshold(current.features.depth_m[i]);
+        evidence->Add(x_w - past_w, threshold);
+        if ((x_w - past_w).norm() > threshold) ++judgement->num_moving_points;
       }
       return full_baseline;
     }
@@ -926,6 +984,7 @@ std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& ins
     judgement.moveable_class = instances.moveable_ids.count(id) > 0;
     judgement.num_features = static_cast<int>(features.size());
     std::vector<int> unmatched;
+    MotionEvidence evidence;
     if (s.coarse_ok) {
       for (int f : features) {
         const size_t i = static_cast<size_t>(f);
@@ -934,19 +993,20 @@ std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& ins
           unmatched.push_back(f);
           continue;
         }
-        const int motion = s.MotionAgainstPoint(i, point, T_wc);
+        const int motion = s.MotionAgainstPoint(i, point, T_wc, &evidence);
         if (motion < 0) continue;
         ++judgement.num_points;
         judgement.num_moving_points += motion;
       }
       bool full_baseline = true;
       if (judgement.num_points < options_.min_points_to_judge) {
-        full_baseline = s.MotionAgainstHistory(id, unmatched, T_wc, &judgement);
+        full_baseline = s.MotionAgainstHistory(id, unmatched, T_wc, &judgement, &evidence);
       }
       judgement.moving_share =
           judgement.num_points > 0 ? double(judgement.num_moving_points) / judgement.num_points : 0;
       const bool measured = judgement.num_points >= options_.min_points_to_judge;
-      judgement.moving = measured && judgement.moving_share >= options_.moving_share_threshold;
+      judgement.moving =
+          measured && judgement.moving_share >= options_.moving_share_threshold && evidence.ConsensusMoves();
       judgement.judged = measured && (judgement.moving || full_baseline);
     }
     // A moveable object that cannot be judged yet is kept out of the pose and the map

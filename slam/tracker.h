@@ -143,9 +143,10 @@ struct TrackerOptions {
   double moving_reprojection_px = 6.0;
   int motion_baseline_frames = 10;
   // An instance with at least min_points_to_judge measured features is moving when at
-  // least moving_share_threshold of them move.
+  // least moving_share_threshold of them move: a majority, since a few mismatches on
+  // a parked car must not make it a moving one (all points of a moving rigid object move).
   int min_points_to_judge = 4;
-  double moving_share_threshold = 0.3;
+  double moving_share_threshold = 0.5;
   // Long-term map export: points seen in at least this many keyframes.
   int long_term_min_observations = 2;
   // Pose of the first frame when no map is loaded (the map's frame).
