@@ -177,3 +177,36 @@ TEST_F(CliBadInputTest, InterruptLeavesNothingBehind) {
 }
 
 }  // namespace
+
+// `segslam run` on a tiny generated sequence with a broken map or missing masks.
+class CliRunBadInputTest : public CliBadInputTest {
+ protected:
+  fs::path GenerateTinySequence() {
+    const fs::path dataset = dir_ / "dataset";
+    const CommandResult generated =
+        RunSegslam(std::string("generate ") + kSmallOffice + " --out " + dataset.string() + " --frames 3 -q");
+    EXPECT_EQ(generated.exit_code, 0) << generated.stderr_text;
+    return dataset / "pass1";
+  }
+
+  void ExpectRunFails(const std::string& arguments, const std::string& fragment) {
+    const CommandResult result = RunSegslam("run " + arguments + " -q --out " + (dir_ / "run").string());
+    EXPECT_NE(result.exit_code, 0);
+    EXPECT_EQ(LineCount(result.stderr_text), 1) << result.stderr_text;
+    EXPECT_NE(result.stderr_text.find(fragment), std::string::npos) << result.stderr_text;
+    EXPECT_FALSE(fs::exists(dir_ / "run" / "trajectory.txt"));
+  }
+};
+
+TEST_F(CliRunBadInputTest, CorruptMapFileIsNamed) {
+  const fs::path sequence = GenerateTinySequence();
+  const fs::path map = dir_ / "broken.segslam";
+  std::ofstream(map, std::ios::binary) << std::string("SEGSLAM-MAP\0", 12) << "not a real payload";
+  ExpectRunFails(sequence.string() + " --mode plain --map-in " + map.string(), "broken.segslam");
+}
+
+TEST_F(CliRunBadInputTest, MissingInstanceTableIsNamed) {
+  const fs::path sequence = GenerateTinySequence();
+  fs::remove(sequence / "instances.json");
+  ExpectRunFails(sequence.string() + " --mode mutual", "instances.json");
+}
