@@ -12,6 +12,7 @@
 #include "core/image_io.h"
 #include "core/instances.h"
 #include "seg/external_masks.h"
+#include "seg/simulated_segmenter.h"
 
 namespace segslam::harness {
 
@@ -19,53 +20,154 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// The instance masks of each frame, from the dataset's ground truth or an external folder.
+fs::path StemOf(const TumSequence& sequence, size_t i) {
+  return fs::path(sequence.entries()[i].rgb_file).stem();
+}
+
+// The segmenter the run's options name: the simulated one, an external masks folder, or
+// none (nullptr) for the dataset's ground-truth masks.
+std::unique_ptr<seg::Segmenter> MakeSegmenter(const TumSequence& sequence, const SlamRunOptions& options) {
+  if (!options.segmenter.empty()) {
+    if (options.masks != "gt") {
+      throw Error("run: --segmenter " + options.segmenter + " and --masks " + options.masks +
+                  " exclude each other (the simulated segmenter degrades the ground-truth masks)");
+    }
+    return std::make_unique<seg::SimulatedSegmenter>(
+        sequence.dir(), seg::SimulatedSegmenterOptions::Preset(options.segmenter), options.segmenter_seed,
+        options.segmenter);
+  }
+  if (options.masks != "gt") return std::make_unique<seg::ExternalMaskSegmenter>(options.masks, sequence);
+  return nullptr;
+}
+
+// The instance masks of each frame as SLAM takes them, unrefined: the dataset's ground
+// truth, or a segmenter's raw output.
 class MaskSource {
  public:
-  MaskSource(const TumSequence& sequence, const std::string& masks) : sequence_(sequence) {
-    if (masks == "gt") {
-      const fs::path table = sequence.dir() / "instances.json";
-      if (!fs::exists(table)) {
-        throw FileError(table, "missing: ground-truth masks need the dataset's instance table "
-                               "(or give --masks DIR with external masks)");
-      }
-      const InstanceTable instances = InstanceTable::Read(table);
-      for (const InstanceInfo& info : instances.instances()) {
-        if (info.moveable) moveable_.insert(info.id);
-      }
-      table_ = instances;
-    } else {
-      external_ = std::make_unique<seg::ExternalMaskSegmenter>(masks, sequence);
+  MaskSource(const TumSequence& sequence, const SlamRunOptions& options)
+      : sequence_(sequence), segmenter_(MakeSegmenter(sequence, options)) {
+    if (segmenter_ != nullptr) return;
+    const fs::path table = sequence.dir() / "instances.json";
+    if (!fs::exists(table)) {
+      throw FileError(table, "missing: ground-truth masks need the dataset's instance table "
+                             "(or give --masks DIR with external masks)");
+    }
+    table_ = InstanceTable::Read(table);
+    for (const InstanceInfo& info : table_.instances()) {
+      if (info.moveable) moveable_.insert(info.id);
     }
   }
 
   slam::FrameInstances Load(const RgbdFrame& frame) {
+    if (segmenter_ != nullptr) {
+      return mutual::ToFrameInstances(segmenter_->Segment(frame), frame.color_bgr.size());
+    }
     slam::FrameInstances instances;
-    if (external_ == nullptr) {
-      const fs::path path = sequence_.dir() / "masks" /
-                            (fs::path(sequence_.entries()[static_cast<size_t>(frame.index)].rgb_file).stem().string() + ".png");
-      instances.ids = ReadInstanceMask(path);
-      if (instances.ids.size() != frame.color_bgr.size()) {
-        throw FileError(path, "mask size differs from the frame's");
-      }
-      CheckMaskIds(instances.ids, table_, path.string());
-      instances.moveable_ids = moveable_;
-      return instances;
+    const fs::path path =
+        sequence_.dir() / "masks" / (StemOf(sequence_, static_cast<size_t>(frame.index)).string() + ".png");
+    instances.ids = ReadInstanceMask(path);
+    if (instances.ids.size() != frame.color_bgr.size()) {
+      throw FileError(path, "mask size differs from the frame's");
     }
-    const seg::FrameSegmentation segmentation = external_->Segment(frame);
-    instances.ids = segmentation.ToIdImage(frame.color_bgr.size());
-    for (const seg::InstanceMask& instance : segmentation.instances) {
-      if (IsMoveableCategory(instance.category_id)) instances.moveable_ids.insert(instance.track_id);
-    }
+    CheckMaskIds(instances.ids, table_, path.string());
+    instances.moveable_ids = moveable_;
     return instances;
   }
 
  private:
   const TumSequence& sequence_;
+  std::unique_ptr<seg::Segmenter> segmenter_;
   InstanceTable table_;
   std::unordered_set<std::uint16_t> moveable_;
-  std::unique_ptr<seg::ExternalMaskSegmenter> external_;
 };
+
+// A frame's refined masks in the external-mask layout (seg/external_masks.h), so a later
+// run or seg-eval can read them back with --masks.
+void WriteMasksInExternalLayout(const fs::path& dir, const fs::path& stem, const seg::FrameSegmentation& masks,
+                                cv::Size size) {
+  WriteInstanceMask(dir / (stem.string() + ".png"), masks.ToIdImage(size));
+  nlohmann::json table = {{"instances", nlohmann::json::array()}};
+  for (const seg::InstanceMask& instance : masks.instances) {
+    table["instances"].push_back(
+        {{"id", instance.track_id}, {"category_id", instance.category_id}, {"score", instance.score}});
+  }
+  WriteFileAtomically(dir / (stem.string() + ".json"), table.dump() + "\n");
+}
+
+double Median(std::vector<double> values) {
+  if (values.empty()) return 0;
+  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2), values.end());
+  return values[values.size() / 2];
+}
+
+// Mutual mode with a segmenter: the paper's loop, refined masks written and scored.
+SlamRunResult RunMutualLoop(const TumSequence& sequence, const SlamRunOptions& options) {
+  const std::unique_ptr<seg::Segmenter> segmenter = MakeSegmenter(sequence, options);
+  mutual::MutualLoopOptions loop_options;
+  loop_options.tracker = options.tracker;
+  loop_options.refiner = options.refiner;
+  mutual::MutualLoop loop(sequence.camera().intrinsics, *segmenter, loop_options);
+  if (!options.map_in.empty()) {
+    loop.LoadLongTermMap(slam::LoadLongTermMap(options.map_in), options.map_in.string());
+  }
+
+  // Scored when the sequence has ground-truth masks (a generated one; not a real TUM one).
+  const fs::path gt_table_path = sequence.dir() / "instances.json";
+  const fs::path gt_masks_dir = sequence.dir() / "masks";
+  const bool score = fs::exists(gt_table_path) && fs::is_directory(gt_masks_dir);
+  InstanceTable gt_table;
+  if (score) gt_table = InstanceTable::Read(gt_table_path);
+  seg::SegmentationEvaluator raw_scores, refined_scores;
+  LoopSegmentationScores loop_scores;
+  loop_scores.segmenter = segmenter->name();
+  std::vector<double> refine_ms;
+
+  if (!options.refined_masks_dir.empty()) {
+    std::error_code error;
+    fs::create_directories(options.refined_masks_dir, error);
+    if (error) throw FileError(options.refined_masks_dir, "cannot create: " + error.message());
+  }
+
+  SlamRunResult result;
+  const int total = options.max_frames > 0 ? std::min<int>(options.max_frames, static_cast<int>(sequence.size()))
+                                           : static_cast<int>(sequence.size());
+  for (int i = 0; i < total; ++i) {
+    RgbdFrame frame = sequence.LoadFrame(static_cast<size_t>(i));
+    frame.index = i;
+    const mutual::MutualFrameResult step = loop.ProcessFrame(frame);
+    if (step.slam.localized()) result.trajectory.push_back({frame.stamp_s, step.slam.T_wc});
+    result.frames.push_back(step.slam);
+    refine_ms.push_back(step.refine_ms);
+    loop_scores.refined_from_previous += step.refined_from_previous;
+    for (const seg::RegionDecision& decision : step.decisions) {
+      ++loop_scores.decision_counts[static_cast<int>(decision.kind)];
+    }
+    const fs::path stem = StemOf(sequence, static_cast<size_t>(i));
+    if (score) {
+      const fs::path gt_path = gt_masks_dir / (stem.string() + ".png");
+      const cv::Mat gt_ids = ReadInstanceMask(gt_path);
+      if (gt_ids.size() != frame.color_bgr.size()) throw FileError(gt_path, "mask size differs from the frame's");
+      raw_scores.AddFrame(gt_ids, gt_table, step.initial);
+      refined_scores.AddFrame(gt_ids, gt_table, step.refined);
+    }
+    if (!options.refined_masks_dir.empty()) {
+      WriteMasksInExternalLayout(options.refined_masks_dir, stem, step.refined, frame.color_bgr.size());
+    }
+    if (options.on_frame) options.on_frame(i + 1, total);
+  }
+  if (score) {
+    loop_scores.raw = raw_scores.Scores();
+    loop_scores.refined = refined_scores.Scores();
+    loop_scores.refine_ms_median = Median(refine_ms);
+    result.segmentation = std::move(loop_scores);
+  }
+  result.long_term_map = loop.tracker().ExportLongTermMap(false);
+  result.long_term_map.description = "segslam long-term map of " + sequence.dir().string() + ", mode mutual, " +
+                                     "segmenter " + segmenter->name();
+  result.keyframes = static_cast<int>(loop.tracker().map().keyframes().size());
+  result.map_points = static_cast<int>(loop.tracker().map().NumGoodPoints());
+  return result;
+}
 
 }  // namespace
 
@@ -84,12 +186,15 @@ double SlamRunResult::MedianTrackingMs() const {
 }
 
 SlamRunResult RunSlamOnSequence(const TumSequence& sequence, const SlamRunOptions& options) {
+  if (options.mode == slam::SlamMode::kMutual && (!options.segmenter.empty() || options.masks != "gt")) {
+    return RunMutualLoop(sequence, options);
+  }
   slam::Tracker tracker(sequence.camera().intrinsics, options.tracker);
   if (!options.map_in.empty()) {
     tracker.LoadLongTermMap(slam::LoadLongTermMap(options.map_in), options.map_in.string());
   }
   std::unique_ptr<MaskSource> masks;
-  if (options.mode != slam::SlamMode::kPlain) masks = std::make_unique<MaskSource>(sequence, options.masks);
+  if (options.mode != slam::SlamMode::kPlain) masks = std::make_unique<MaskSource>(sequence, options);
 
   SlamRunResult result;
   const int total = options.max_frames > 0 ? std::min<int>(options.max_frames, static_cast<int>(sequence.size()))

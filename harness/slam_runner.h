@@ -1,17 +1,30 @@
 // Runs the SLAM core (slam/tracker.h) over one TUM-layout sequence in one of the three
-// modes, with instance masks from the dataset's ground truth or from an external
-// segmenter's folder, and writes what a run produces: the trajectory (TUM, camera-to-
-// world, localized frames only), one JSON line per frame (status, timings, instance
-// judgements) and, on request, the long-term map with a PLY copy.
+// modes, with instance masks from the dataset's ground truth, from an external
+// segmenter's folder or from the simulated segmenter, and writes what a run produces:
+// the trajectory (TUM, camera-to-world, localized frames only), one JSON line per frame
+// (status, timings, instance judgements) and, on request, the long-term map with a PLY
+// copy.
+//
+// Mutual mode with a segmenter (the simulated one, or an external masks folder) runs the
+// paper's loop (mutual/mutual_loop.h): the segmenter's masks are refined with SLAM's
+// poses before SLAM judges them; the refined masks can be written out, and on a
+// sequence with ground-truth masks raw and refined masks are scored (seg/metrics.h).
+// Mutual mode with the ground-truth masks ("gt") skips the refinement: there is nothing
+// to repair.
 #pragma once
 
+#include <array>
+#include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "core/pose.h"
 #include "core/tum_dataset.h"
+#include "mutual/mutual_loop.h"
+#include "seg/metrics.h"
 #include "slam/map_file.h"
 #include "slam/tracker.h"
 
@@ -22,6 +35,16 @@ struct SlamRunOptions {
   // "gt": <sequence>/masks/<stem>.png with <sequence>/instances.json; otherwise a folder
   // of external masks (seg/external_masks.h). Unused in plain mode.
   std::string masks = "gt";
+  // A simulated segmenter preset (seg/simulated_segmenter.h: clean, fcis-like,
+  // mask-rcnn-like, poor) instead of `masks` (which must then stay "gt"); empty = none.
+  // mask-moveable drops features on its raw masks; mutual refines them in the loop.
+  std::string segmenter;
+  std::uint64_t segmenter_seed = 1;
+  // The loop's refiner options (mutual mode with a segmenter).
+  seg::RefinerOptions refiner;
+  // Where the loop writes each frame's refined masks, in the external-mask layout
+  // (seg/external_masks.h: <stem>.png + <stem>.json); empty = not written.
+  std::filesystem::path refined_masks_dir;
   std::filesystem::path map_in;  // a long-term map to localize on (the second pass)
   slam::TrackerOptions tracker;
   int max_frames = 0;            // 0 = all
@@ -29,8 +52,23 @@ struct SlamRunOptions {
   std::function<void(int, int)> on_frame;
 };
 
+// Raw vs refined masks of a mutual-loop run against the sequence's ground-truth masks,
+// with SLAM's poses ("segmentation in the loop"; seg-eval does the same with the true
+// poses).
+struct LoopSegmentationScores {
+  std::string segmenter;             // the segmenter's name()
+  seg::SegmentationScores raw;       // the segmenter's masks
+  seg::SegmentationScores refined;   // the loop's refined masks
+  int refined_from_previous = 0;     // frames refined by projecting the previous frame
+  // RegionDecision kinds summed over the sequence, indexed by RegionDecision::Kind.
+  std::array<int, 5> decision_counts{};
+  double refine_ms_median = 0;
+};
+
 struct SlamRunResult {
   std::vector<slam::FrameResult> frames;
+  // Mutual loop on a sequence with ground-truth masks only.
+  std::optional<LoopSegmentationScores> segmentation;
   std::vector<StampedPose> trajectory;  // T_wc of the localized frames
   slam::LongTermMapData long_term_map;
   int keyframes = 0;
@@ -39,7 +77,8 @@ struct SlamRunResult {
   double MedianTrackingMs() const;
 };
 
-// Throws segslam::Error naming the file on unreadable frames, masks or map files.
+// Throws segslam::Error naming the file on unreadable frames, masks or map files, and
+// segslam::Error on `segmenter` together with external `masks` or an unknown preset.
 SlamRunResult RunSlamOnSequence(const TumSequence& sequence, const SlamRunOptions& options);
 
 // frames.jsonl: one JSON object per frame.

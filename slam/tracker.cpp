@@ -132,6 +132,7 @@ class RotationHistogram {
 // features, their descriptors and world positions.
 struct InstanceSnapshot {
   int frame_index = 0;
+  double stamp_s = 0;
   std::vector<std::uint16_t> instance;          // per stored feature
   std::vector<Eigen::Vector3d> point_w;         // NaN where no depth
   cv::Mat descriptors;                          // rows = stored features
@@ -525,7 +526,7 @@ struct Tracker::Impl {
     const int x = static_cast<int>(std::lround(kp.pt.x));
     const int y = static_cast<int>(std::lround(kp.pt.y));
     const float depth = current.features.depth_m[i];
-    const int r = 2;
+    const int r = 1;
     if (x < r || y < r || x >= current.depth_m.cols - r || y >= current.depth_m.rows - r) return true;
     for (int dy = -r; dy <= r; ++dy) {
       const float* row = current.depth_m.ptr<float>(y + dy);
@@ -562,6 +563,7 @@ struct Tracker::Impl {
   InstanceSnapshot Snapshot() const {
     InstanceSnapshot snapshot;
     snapshot.frame_index = current.index;
+    snapshot.stamp_s = current.stamp_s;
     const Eigen::Isometry3d T_wc = current.T_cw.inverse();
     std::vector<int> rows;
     for (size_t i = 0; i < current.instance.size(); ++i) {
@@ -587,7 +589,7 @@ struct Tracker::Impl {
   bool MotionAgainstHistory(std::uint16_t id, const std::vector<int>& features, const Eigen::Isometry3d& T_wc,
                             InstanceJudgement* judgement, MotionEvidence* evidence) const {
     for (const InstanceSnapshot& snapshot : history) {  // oldest first
-      const bool full_baseline = current.index - snapshot.frame_index >= options.motion_baseline_frames;
+      const bool full_baseline = current.stamp_s - snapshot.stamp_s >= options.motion_baseline_s - 1e-6;
       std::vector<int> rows;
       for (size_t k = 0; k < snapshot.instance.size(); ++k) {
         if (snapshot.instance[k] == id && std::isfinite(snapshot.point_w[k].x())) rows.push_back(static_cast<int>(k));
@@ -1089,7 +1091,10 @@ FrameResult Tracker::UpdateMaps() {
     s.velocity = s.have_last && !s.last_lost() ? std::optional<Eigen::Isometry3d>(s.current.T_cw * s.last.T_cw.inverse())
                                                 : std::nullopt;
     s.history.push_back(s.Snapshot());
-    while (static_cast<int>(s.history.size()) > options_.motion_baseline_frames) s.history.pop_front();
+    // Keep the newest snapshot at least one baseline old, and everything younger.
+    while (s.history.size() > 1 && s.current.stamp_s - s.history[1].stamp_s >= options_.motion_baseline_s - 1e-6) {
+      s.history.pop_front();
+    }
   } else {
     s.velocity.reset();
     s.history.clear();

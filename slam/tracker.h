@@ -135,13 +135,13 @@ struct TrackerOptions {
   bool local_bundle_adjustment = true;
   int local_ba_keyframes = 7;
   // Instance judgement (step 3): a feature is moving when its 3-D position disagrees
-  // with its match (map point, or the same instance's feature some frames back) by more
+  // with its match (map point, or the same instance's feature motion_baseline_s back) by more
   // than moving_distance_m + moving_distance_per_m * depth; without depth, when its
   // reprojection error exceeds moving_reprojection_px (times the level's scale).
   double moving_distance_m = 0.05;
   double moving_distance_per_m = 0.02;
   double moving_reprojection_px = 6.0;
-  int motion_baseline_frames = 10;
+  double motion_baseline_s = 0.3;
   // An instance with at least min_points_to_judge measured features is moving when at
   // least moving_share_threshold of them move: a majority, since a few mismatches on
   // a parked car must not make it a moving one (all points of a moving rigid object move).

@@ -210,3 +210,8 @@ TEST_F(CliRunBadInputTest, MissingInstanceTableIsNamed) {
   fs::remove(sequence / "instances.json");
   ExpectRunFails(sequence.string() + " --mode mutual", "instances.json");
 }
+
+TEST_F(CliRunBadInputTest, UnknownModeIsRefused) {
+  const fs::path sequence = GenerateTinySequence();
+  ExpectRunFails(sequence.string() + " --mode dynaslam", "dynaslam");
+}
