@@ -18,6 +18,7 @@
 #include "harness/slam_runner.h"
 #include "harness/trajectory_metrics.h"
 #include "seg/simulated_segmenter.h"
+#include "slam/tracker_option_overrides.h"
 
 namespace segslam::harness {
 
@@ -36,6 +37,7 @@ struct RunArgs {
   std::string out_dir;
   std::string camera_file;
   int frames = 0;
+  std::vector<std::string> tracker_options;  // NAME=VALUE overrides of slam::TrackerOptions
   bool quiet = false;
 };
 
@@ -59,6 +61,7 @@ PassOutcome RunPass(const RunArgs& args, const fs::path& sequence_dir, const fs:
   if (mutual_loop) options.refined_masks_dir = out_dir / "refined_masks";
   options.map_in = map_in;
   options.max_frames = args.frames;
+  for (const std::string& assignment : args.tracker_options) slam::SetTrackerOption(&options.tracker, assignment);
   ProgressBar bar(fmt::format("run {} {}", args.mode, sequence_dir.filename().string()));
   const std::atomic<bool>* cancel = InstallInterruptFlag();
   const auto start = std::chrono::steady_clock::now();
@@ -151,6 +154,8 @@ void PrintLoopSegmentation(const std::vector<std::pair<std::string, PassOutcome>
 
 int RunRun(const RunArgs& args) {
   slam::ParseSlamMode(args.mode);  // a bad mode fails before anything is read or written
+  slam::TrackerOptions checked;
+  for (const std::string& assignment : args.tracker_options) slam::SetTrackerOption(&checked, assignment);
   if (!args.segmenter.empty() && args.masks != "gt") {
     throw Error("run: --segmenter " + args.segmenter + " and --masks " + args.masks + " exclude each other");
   }
@@ -209,6 +214,8 @@ void AddRunCommand(CLI::App& app, std::function<int()>* action) {
   cmd->add_option("--frames", args->frames, "Only the first N frames of each sequence (0 = all)");
   cmd->add_option("--camera", args->camera_file,
                   "camera.yaml to use instead of the sequence's own (for a real sequence without one)");
+  cmd->add_option("--tracker", args->tracker_options,
+                  "Override a tracker option, NAME=VALUE (repeatable; see slam/tracker.h)");
   cmd->add_flag("-q,--quiet", args->quiet, "No progress bar");
   cmd->callback([args, action] { *action = [args] { return RunRun(*args); }; });
 }
