@@ -99,8 +99,9 @@ dl.metadata { display: grid; grid-template-columns: max-content auto; gap: 4px 1
 dl.metadata dt { font-weight: 600; }
 dl.metadata dd { margin: 0; font-family: ui-monospace, "DejaVu Sans Mono", monospace; font-size: .92em;
                  overflow-wrap: anywhere; }
-table { border-collapse: collapse; margin: 8px 0 28px; font-variant-numeric: tabular-nums; }
-caption { caption-side: top; text-align: left; font-weight: 600; padding: 4px 0 8px; }
+div.table { overflow-x: auto; margin: 8px 0 28px; }
+p.table-caption { font-weight: 600; margin: 0 0 8px; }
+table { border-collapse: collapse; font-variant-numeric: tabular-nums; }
 th, td { border: 1px solid #d0d7de; padding: 6px 12px; vertical-align: top; }
 th { background: #eef1f4; text-align: left; }
 tbody tr:nth-child(even) td { background: #f8f9fa; }
@@ -247,8 +248,10 @@ std::string ReportDocument::ToHtml() const {
       case BlockType::kTable: {
         const ReportTable& table = block.table;
         const std::vector<bool> numeric = NumericColumns(table);
+        // The caption outside the table, so a long one does not wrap to the table's width.
+        html += "<div class=\"table\">\n";
+        if (!table.caption.empty()) html += "<p class=\"table-caption\">" + EscapeHtml(table.caption) + "</p>\n";
         html += "<table>\n";
-        if (!table.caption.empty()) html += "<caption>" + EscapeHtml(table.caption) + "</caption>\n";
         html += "<thead><tr>";
         for (size_t c = 0; c < table.header.size(); ++c) {
           html += (numeric[c] ? "<th class=\"num\">" : "<th>") + EscapeHtml(table.header[c]) + "</th>";
@@ -261,7 +264,7 @@ std::string ReportDocument::ToHtml() const {
           }
           html += "</tr>\n";
         }
-        html += "</tbody>\n</table>\n";
+        html += "</tbody>\n</table>\n</div>\n";
         break;
       }
       case BlockType::kImage:

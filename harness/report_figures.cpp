@@ -244,7 +244,8 @@ void DrawLegend(cv::Mat& image, cv::Point top_left, const std::vector<LegendEntr
 
 // The corner of the plot area where the legend covers the fewest data points
 // (preference on ties: top right, top left, bottom right, bottom left).
-cv::Point LegendCorner(const cv::Rect& area, cv::Size legend, const std::vector<cv::Point2d>& data_px) {
+cv::Point LegendCorner(const cv::Rect& area, cv::Size legend, const std::vector<cv::Point2d>& data_px,
+                       size_t* covered_points) {
   constexpr int kInset = 10;
   const std::array<cv::Point, 4> corners = {
       cv::Point(area.x + area.width - kInset - legend.width, area.y + kInset),
@@ -263,7 +264,24 @@ cv::Point LegendCorner(const cv::Rect& area, cv::Size legend, const std::vector<
       best = corner;
     }
   }
+  *covered_points = fewest;
   return best;
+}
+
+// Where a legend goes: inside the plot area in the corner it hides nothing of, else to
+// the right of the plot area (the caller then has to make room there first).
+constexpr int kOutsideLegendGapPx = 14;
+
+// The points of a polyline every few pixels, so a legend over a long straight segment
+// between two vertices counts as covering it.
+void AppendDensified(const std::vector<cv::Point2d>& polyline_px, std::vector<cv::Point2d>* out) {
+  for (size_t i = 0; i < polyline_px.size(); ++i) {
+    out->push_back(polyline_px[i]);
+    if (i + 1 == polyline_px.size()) break;
+    const cv::Point2d step = polyline_px[i + 1] - polyline_px[i];
+    const int pieces = static_cast<int>(std::ceil(std::hypot(step.x, step.y) / 3.0));
+    for (int k = 1; k < pieces; ++k) out->push_back(polyline_px[i] + step * (double(k) / pieces));
+  }
 }
 
 cv::Mat WhiteCanvas(cv::Size size) { return cv::Mat(size, CV_8UC3, kWhite); }
@@ -343,32 +361,71 @@ Figure DrawTopView(const TopViewOptions& options, const NamedTrajectory& ground_
   }
   if (!(x_lo <= x_hi)) throw Error("top-view plot '" + options.title + "': no trajectory has a pose");
 
+  // Legend entries first: their size decides whether the legend fits inside the plot.
+  const auto color_of = [](size_t k) { return k == 0 ? kGroundTruthColor : SeriesColor(k - 1); };
+  const auto thickness_of = [](size_t k) { return k == 0 ? 3 : 2; };
+  std::vector<LegendEntry> legend;
+  for (size_t k = 0; k < trajectories.size(); ++k) {
+    legend.push_back({trajectories[k]->name, color_of(k), thickness_of(k), Marker::kNone});
+  }
+  const cv::Scalar marker_grey(150, 150, 150);
+  legend.push_back({"start", marker_grey, 0, Marker::kCircle});
+  legend.push_back({"end", marker_grey, 0, Marker::kSquare});
+  const cv::Size legend_size = LegendSize(legend);
+  std::vector<std::vector<std::vector<cv::Point2d>>> segments_of;  // per trajectory, metres
+  for (const NamedTrajectory* trajectory : trajectories) {
+    segments_of.push_back(GroundPlaneSegments(trajectory->poses, options.gap_factor));
+  }
+
   // Equal scale: the axis with room to spare shows more, centred on the data.
   const double extent = std::max({x_hi - x_lo, y_hi - y_lo, 0.1});
   const double pad = options.padding * extent;
-  const double provisional_step = NiceStep(extent, 6);
-  const Ticks provisional_y = NiceTicks(y_lo - extent, y_hi + extent, provisional_step);
-  const Margins margins = PlotMargins(!options.title.empty(), WidestLabel(provisional_y));
-  // A figure no taller than the trajectories need: the plot area takes their aspect.
+  const Ticks provisional_y = NiceTicks(y_lo - extent, y_hi + extent, NiceStep(extent, 6));
+  Margins margins = PlotMargins(!options.title.empty(), WidestLabel(provisional_y));
   cv::Size figure_size = options.size;
-  if (options.shrink_to_fit) {
-    const int width_px = PlotArea(figure_size, margins).width;
-    const double needed_height_px = width_px * (y_hi - y_lo + 2 * pad) / (x_hi - x_lo + 2 * pad);
-    const int needed_figure_px = static_cast<int>(std::ceil(needed_height_px)) + margins.top + margins.bottom;
-    figure_size.height = std::clamp(needed_figure_px, std::min(options.size.height, 320), options.size.height);
+  const auto layout = [&]() {
+    // A figure no taller than the trajectories need: the plot area takes their aspect.
+    figure_size = options.size;
+    if (options.shrink_to_fit) {
+      const int width_px = PlotArea(figure_size, margins).width;
+      const double needed_height_px = width_px * (y_hi - y_lo + 2 * pad) / (x_hi - x_lo + 2 * pad);
+      const int needed_figure_px = static_cast<int>(std::ceil(needed_height_px)) + margins.top + margins.bottom;
+      figure_size.height = std::clamp(needed_figure_px, std::min(options.size.height, 320), options.size.height);
+    }
+    PlotAxes axes;
+    axes.area = PlotArea(figure_size, margins);
+    const double scale_px_per_m =
+        std::min(axes.area.width / (x_hi - x_lo + 2 * pad), axes.area.height / (y_hi - y_lo + 2 * pad));
+    const double x_center = (x_lo + x_hi) / 2, y_center = (y_lo + y_hi) / 2;
+    axes.x_min = x_center - axes.area.width / (2 * scale_px_per_m);
+    axes.x_max = x_center + axes.area.width / (2 * scale_px_per_m);
+    axes.y_min = y_center - axes.area.height / (2 * scale_px_per_m);
+    axes.y_max = y_center + axes.area.height / (2 * scale_px_per_m);
+    return axes;
+  };
+  const auto data_pixels = [&](const PlotAxes& axes) {
+    std::vector<cv::Point2d> pixels;
+    for (const auto& segments : segments_of) {
+      for (const auto& segment : segments) {
+        std::vector<cv::Point2d> polyline;
+        for (const cv::Point2d& p : segment) polyline.push_back(axes.ToPixel(p.x, p.y));
+        AppendDensified(polyline, &pixels);
+      }
+    }
+    return pixels;
+  };
+  PlotAxes axes = layout();
+  size_t covered_points = 0;
+  cv::Point legend_at = LegendCorner(axes.area, legend_size, data_pixels(axes), &covered_points);
+  if (covered_points > 0) {
+    margins.right += legend_size.width + kOutsideLegendGapPx;
+    axes = layout();
+    legend_at = {axes.area.x + axes.area.width + kOutsideLegendGapPx, axes.area.y};
   }
-  const cv::Rect area = PlotArea(figure_size, margins);
-  const double scale_px_per_m = std::min(area.width / (x_hi - x_lo + 2 * pad), area.height / (y_hi - y_lo + 2 * pad));
-  PlotAxes axes;
-  axes.area = area;
-  const double x_center = (x_lo + x_hi) / 2, y_center = (y_lo + y_hi) / 2;
-  axes.x_min = x_center - area.width / (2 * scale_px_per_m);
-  axes.x_max = x_center + area.width / (2 * scale_px_per_m);
-  axes.y_min = y_center - area.height / (2 * scale_px_per_m);
-  axes.y_max = y_center + area.height / (2 * scale_px_per_m);
+  const cv::Rect area = axes.area;
   // One grid step for both axes, about every 90 pixels, so the grid is made of squares.
-  const double step = NiceStep(std::max(area.width, area.height) / scale_px_per_m,
-                               std::max(area.width, area.height) / 90.0);
+  const double longer_side_px = std::max(area.width, area.height);
+  const double step = NiceStep(longer_side_px / axes.PixelsPerUnitX(), longer_side_px / 90.0);
 
   Figure figure;
   figure.axes = axes;
@@ -378,24 +435,15 @@ Figure DrawTopView(const TopViewOptions& options, const NamedTrajectory& ground_
 
   // Trajectories clipped to the plot area; ground truth first, under the estimates.
   cv::Mat plot = figure.image(area);
-  std::vector<cv::Point2d> data_px;
-  std::vector<LegendEntry> legend;
   for (size_t k = 0; k < trajectories.size(); ++k) {
-    const cv::Scalar color = k == 0 ? kGroundTruthColor : SeriesColor(k - 1);
-    const int thickness = k == 0 ? 3 : 2;
-    legend.push_back({trajectories[k]->name, color, thickness, Marker::kNone});
-    const auto segments = GroundPlaneSegments(trajectories[k]->poses, options.gap_factor);
-    for (const auto& segment : segments) {
+    for (const auto& segment : segments_of[k]) {
       std::vector<cv::Point2d> pixels;
-      for (const cv::Point2d& p : segment) {
-        pixels.push_back(axes.ToPixel(p.x, p.y) - cv::Point2d(area.x, area.y));
-        data_px.push_back(axes.ToPixel(p.x, p.y));
-      }
-      DrawPolyline(plot, pixels, color, thickness);
+      for (const cv::Point2d& p : segment) pixels.push_back(axes.ToPixel(p.x, p.y) - cv::Point2d(area.x, area.y));
+      DrawPolyline(plot, pixels, color_of(k), thickness_of(k));
       // A single pose between two gaps is still visible.
       if (pixels.size() == 1) {
-        cv::circle(plot, Fixed(pixels[0]), static_cast<int>(thickness * kSubPixel), color, cv::FILLED, cv::LINE_AA,
-                   kShift);
+        cv::circle(plot, Fixed(pixels[0]), static_cast<int>(thickness_of(k) * kSubPixel), color_of(k), cv::FILLED,
+                   cv::LINE_AA, kShift);
       }
     }
   }
@@ -403,17 +451,12 @@ Figure DrawTopView(const TopViewOptions& options, const NamedTrajectory& ground_
   for (size_t k = 0; k < trajectories.size(); ++k) {
     const auto& poses = trajectories[k]->poses;
     if (poses.empty()) continue;
-    const cv::Scalar color = k == 0 ? kGroundTruthColor : SeriesColor(k - 1);
     const Eigen::Vector3d& first = poses.front().T_wc.translation();
     const Eigen::Vector3d& last = poses.back().T_wc.translation();
-    DrawMarker(figure.image, axes.ToPixel(first.x(), first.y()), Marker::kCircle, color, 11);
-    DrawMarker(figure.image, axes.ToPixel(last.x(), last.y()), Marker::kSquare, color, 9);
+    DrawMarker(figure.image, axes.ToPixel(first.x(), first.y()), Marker::kCircle, color_of(k), 11);
+    DrawMarker(figure.image, axes.ToPixel(last.x(), last.y()), Marker::kSquare, color_of(k), 9);
   }
-  const cv::Scalar marker_grey(150, 150, 150);
-  legend.push_back({"start", marker_grey, 0, Marker::kCircle});
-  legend.push_back({"end", marker_grey, 0, Marker::kSquare});
-  const cv::Size legend_size = LegendSize(legend);
-  DrawLegend(figure.image, LegendCorner(area, legend_size, data_px), legend);
+  DrawLegend(figure.image, legend_at, legend);
   return figure;
 }
 
@@ -483,59 +526,87 @@ Figure DrawLinePlot(const LinePlotOptions& options, const std::vector<double>& x
     const double x_step = NiceStep(x_span, 8);
     x_ticks = NiceTicks(axes.x_min, axes.x_max, x_step);
   }
-  const Margins margins = PlotMargins(!options.title.empty(), WidestLabel(y_ticks));
+  static const std::array<Marker, 5> kMarkers = {Marker::kCircle, Marker::kSquare, Marker::kTriangle,
+                                                 Marker::kDiamond, Marker::kInvertedTriangle};
+  std::vector<LegendEntry> legend;
+  for (size_t k = 0; k < series.size(); ++k) {
+    legend.push_back({series[k].name, SeriesColor(k), 2, kMarkers[k % kMarkers.size()]});
+  }
+
+  // Each series in pixels: line pieces (broken at missing values), markers, error bars.
+  struct SeriesPixels {
+    std::vector<std::vector<cv::Point2d>> lines;
+    std::vector<cv::Point2d> markers;
+    std::vector<std::pair<cv::Point2d, cv::Point2d>> bars;  // bottom, top
+  };
+  const auto series_pixels = [&](const PlotAxes& plot_axes) {
+    std::vector<SeriesPixels> all(series.size());
+    for (size_t k = 0; k < series.size(); ++k) {
+      const PlotSeries& s = series[k];
+      SeriesPixels& pixels = all[k];
+      // Series side by side at each x when bars are drawn, so they do not hide each other.
+      const double dodge_px = any_error_bar ? (k - (series.size() - 1) / 2.0) * 7.0 : 0.0;
+      const auto at = [&](size_t i, double y) { return plot_axes.ToPixel(x[i], y) + cv::Point2d(dodge_px, 0); };
+      pixels.lines.emplace_back();
+      for (size_t i = 0; i < x.size(); ++i) {
+        if (!std::isfinite(s.y[i])) {
+          pixels.lines.emplace_back();
+          continue;
+        }
+        pixels.lines.back().push_back(at(i, s.y[i]));
+        pixels.markers.push_back(at(i, s.y[i]));
+        const double lo = s.y_min.empty() ? NAN : s.y_min[i];
+        const double hi = s.y_max.empty() ? NAN : s.y_max[i];
+        if (std::isfinite(lo) || std::isfinite(hi)) {
+          pixels.bars.emplace_back(at(i, std::isfinite(lo) ? lo : s.y[i]), at(i, std::isfinite(hi) ? hi : s.y[i]));
+        }
+      }
+    }
+    return all;
+  };
+  const auto data_pixels = [&](const std::vector<SeriesPixels>& all) {
+    std::vector<cv::Point2d> pixels;
+    for (const SeriesPixels& one : all) {
+      for (const auto& line : one.lines) AppendDensified(line, &pixels);
+      for (const auto& [bottom, top] : one.bars) AppendDensified({bottom, top}, &pixels);
+    }
+    return pixels;
+  };
+
+  Margins margins = PlotMargins(!options.title.empty(), WidestLabel(y_ticks));
   axes.area = PlotArea(options.size, margins);
+  const cv::Size legend_size = LegendSize(legend);
+  size_t covered_points = 0;
+  cv::Point legend_at = LegendCorner(axes.area, legend_size, data_pixels(series_pixels(axes)), &covered_points);
+  if (covered_points > 0) {
+    margins.right += legend_size.width + kOutsideLegendGapPx;
+    axes.area = PlotArea(options.size, margins);
+    legend_at = {axes.area.x + axes.area.width + kOutsideLegendGapPx, axes.area.y};
+  }
 
   Figure figure;
   figure.axes = axes;
   figure.image = WhiteCanvas(options.size);
   DrawAxes(figure.image, axes, x_ticks, y_ticks, options.x_label, options.y_label, options.title);
-
-  static const std::array<Marker, 5> kMarkers = {Marker::kCircle, Marker::kSquare, Marker::kTriangle,
-                                                 Marker::kDiamond, Marker::kInvertedTriangle};
-  std::vector<cv::Point2d> data_px;
-  std::vector<LegendEntry> legend;
+  const std::vector<SeriesPixels> all = series_pixels(axes);
   for (size_t k = 0; k < series.size(); ++k) {
-    const PlotSeries& s = series[k];
     const cv::Scalar color = SeriesColor(k);
-    const Marker marker = kMarkers[k % kMarkers.size()];
-    legend.push_back({s.name, color, 2, marker});
-    // Series side by side at each x when bars are drawn, so they do not hide each other.
-    const double dodge_px = any_error_bar ? (k - (series.size() - 1) / 2.0) * 7.0 : 0.0;
-    const auto at = [&](size_t i, double y) { return axes.ToPixel(x[i], y) + cv::Point2d(dodge_px, 0); };
-    std::vector<cv::Point2d> line;
-    const auto flush = [&] {
-      DrawPolyline(figure.image, line, color, 2);
-      line.clear();
-    };
-    for (size_t i = 0; i < x.size(); ++i) {
-      if (!std::isfinite(s.y[i])) {
-        flush();
-        continue;
-      }
-      line.push_back(at(i, s.y[i]));
-      data_px.push_back(line.back());
-    }
-    flush();
-    for (size_t i = 0; i < x.size(); ++i) {
-      const double lo = s.y_min.empty() ? NAN : s.y_min[i];
-      const double hi = s.y_max.empty() ? NAN : s.y_max[i];
-      const double center = std::isfinite(s.y[i]) ? s.y[i] : NAN;
-      const double bottom = std::isfinite(lo) ? lo : center, top = std::isfinite(hi) ? hi : center;
-      if (!std::isfinite(bottom) || !std::isfinite(top)) continue;
-      const cv::Point2d a = at(i, bottom), b = at(i, top);
-      cv::line(figure.image, Fixed(a), Fixed(b), color, 1, cv::LINE_AA, kShift);
-      for (const cv::Point2d& end : {a, b}) {
+    for (const auto& line : all[k].lines) DrawPolyline(figure.image, line, color, 2);
+    for (const auto& [bottom, top] : all[k].bars) {
+      cv::line(figure.image, Fixed(bottom), Fixed(top), color, 1, cv::LINE_AA, kShift);
+      for (const cv::Point2d& end : {bottom, top}) {
         cv::line(figure.image, Fixed(end - cv::Point2d(4, 0)), Fixed(end + cv::Point2d(4, 0)), color, 1, cv::LINE_AA,
                  kShift);
-        data_px.push_back(end);
       }
     }
-    for (size_t i = 0; i < x.size(); ++i) {
-      if (std::isfinite(s.y[i])) DrawMarker(figure.image, at(i, s.y[i]), marker, color, 9);
+  }
+  // Markers last, over every line and bar.
+  for (size_t k = 0; k < series.size(); ++k) {
+    for (const cv::Point2d& marker : all[k].markers) {
+      DrawMarker(figure.image, marker, kMarkers[k % kMarkers.size()], SeriesColor(k), 9);
     }
   }
-  if (!legend.empty()) DrawLegend(figure.image, LegendCorner(axes.area, LegendSize(legend), data_px), legend);
+  if (!legend.empty()) DrawLegend(figure.image, legend_at, legend);
   return figure;
 }
 

@@ -76,7 +76,7 @@ TEST(ReportDocumentTest, HtmlEscapesTextAndHoldsTheTableAndImage) {
   EXPECT_EQ(Count(html, "</td>"), 12u);
   EXPECT_NE(html.find("<th>mode</th><th class=\"num\">median</th>"), std::string::npos);
   EXPECT_NE(html.find("<td>mask|moveable</td>"), std::string::npos);
-  EXPECT_NE(html.find("<caption>ATE [m] per mode</caption>"), std::string::npos);
+  EXPECT_NE(html.find("<p class=\"table-caption\">ATE [m] per mode</p>"), std::string::npos);
   // The image by relative, percent-encoded path; its caption escaped.
   EXPECT_NE(html.find("<img src=\"figures/top%20view.png\" alt=\"Top view &lt;x-y&gt;\">"), std::string::npos);
   EXPECT_NE(html.find("<figcaption>Top view &lt;x-y&gt;</figcaption>"), std::string::npos);
