@@ -101,11 +101,56 @@ void DrawMarker(cv::Mat& image, const cv::Point2d& center, Marker marker, const 
   cv::polylines(image, std::vector<std::vector<cv::Point>>{polygon}, true, kBlack, 1, cv::LINE_AA, kShift);
 }
 
+// Distance from p to the segment a-b (to a, when a and b coincide).
+double DistanceToSegment(const cv::Point2d& p, const cv::Point2d& a, const cv::Point2d& b) {
+  const cv::Point2d ab = b - a;
+  const double length2 = ab.dot(ab);
+  const double t = length2 > 0 ? std::clamp((p - a).dot(ab) / length2, 0.0, 1.0) : 0.0;
+  const cv::Point2d d = p - (a + t * ab);
+  return std::hypot(d.x, d.y);
+}
+
+// Douglas-Peucker with distances to segments, so closed loops (first point = last)
+// keep their shape; cv::approxPolyDP's open-curve mode collapses them.
+std::vector<cv::Point2d> SimplifyPolyline(const std::vector<cv::Point2d>& points, double tolerance_px) {
+  if (points.size() < 3) return points;
+  std::vector<bool> keep(points.size(), false);
+  keep.front() = keep.back() = true;
+  std::vector<std::pair<size_t, size_t>> spans = {{0, points.size() - 1}};
+  while (!spans.empty()) {
+    const auto [first, last] = spans.back();
+    spans.pop_back();
+    double farthest = -1;
+    size_t farthest_index = first;
+    for (size_t i = first + 1; i < last; ++i) {
+      const double distance = DistanceToSegment(points[i], points[first], points[last]);
+      if (distance > farthest) {
+        farthest = distance;
+        farthest_index = i;
+      }
+    }
+    if (farthest > tolerance_px) {
+      keep[farthest_index] = true;
+      spans.emplace_back(first, farthest_index);
+      spans.emplace_back(farthest_index, last);
+    }
+  }
+  std::vector<cv::Point2d> kept;
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (keep[i]) kept.push_back(points[i]);
+  }
+  return kept;
+}
+
 void DrawPolyline(cv::Mat& image, const std::vector<cv::Point2d>& points, const cv::Scalar& color, int thickness) {
   if (points.size() < 2) return;
+  // Densely sampled paths have many vertices a pixel apart, and every antialiased joint
+  // darkens the line a little: the line looks beaded. Vertices within a quarter pixel
+  // of the simplified path add nothing visible, so they are dropped first.
+  const std::vector<cv::Point2d> simplified = SimplifyPolyline(points, 0.25);
   std::vector<cv::Point> fixed;
-  fixed.reserve(points.size());
-  for (const cv::Point2d& p : points) fixed.push_back(Fixed(p));
+  fixed.reserve(simplified.size());
+  for (const cv::Point2d& p : simplified) fixed.push_back(Fixed(p));
   cv::polylines(image, std::vector<std::vector<cv::Point>>{fixed}, false, color, thickness, cv::LINE_AA, kShift);
 }
 
