@@ -853,11 +853,19 @@ cv::Mat DrawFeatureKinds(const cv::Mat& color_bgr, const cv::Mat& instance_ids, 
   }
   entries.push_back({fmt::format("instance judged moving ({})", moving_instances), std::nullopt});
   constexpr int kEntryGapPx = 22, kSamplePx = 18, kRowPx = 24, kSidePx = 10;
+  // A frame narrower than the longest entry gets a white band on its right.
+  int picture_width = frame.cols;
+  for (const Entry& entry : entries) {
+    picture_width = std::max(picture_width, 2 * kSidePx + kSamplePx + 6 + TextSize(entry.text, kLegendFontScale, 1).width);
+  }
+  if (!title.empty()) {
+    picture_width = std::max(picture_width, 2 * kSidePx + TextSize(title, kLabelFontScale, 1).width);
+  }
   std::vector<cv::Point> positions;
   int u = kSidePx, row = 0;
   for (const Entry& entry : entries) {
     const int width = kSamplePx + 6 + TextSize(entry.text, kLegendFontScale, 1).width;
-    if (u > kSidePx && u + width > frame.cols - kSidePx) {
+    if (u > kSidePx && u + width > picture_width - kSidePx) {
       u = kSidePx;
       ++row;
     }
@@ -866,7 +874,7 @@ cv::Mat DrawFeatureKinds(const cv::Mat& color_bgr, const cv::Mat& instance_ids, 
   }
   const int title_px = title.empty() ? 0 : 30;
   const int strip_px = title_px + (row + 1) * kRowPx + 12;
-  cv::Mat picture(frame.rows + strip_px, frame.cols, CV_8UC3, kWhite);
+  cv::Mat picture(frame.rows + strip_px, picture_width, CV_8UC3, kWhite);
   frame.copyTo(picture(cv::Rect(0, 0, frame.cols, frame.rows)));
   const int strip_top = frame.rows + 6;
   if (!title.empty()) {

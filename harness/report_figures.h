@@ -120,7 +120,8 @@ cv::Scalar FeatureKindColor(slam::FeatureKind kind);
 // The frame with its features (FrameResult::feature_records) as dots coloured by kind,
 // every instance judged moving outlined (from `instance_ids`, CV_16U, the masks the
 // judgement used), and a legend strip with the count of each kind and `title` below the
-// frame. Throws segslam::Error on wrong image types or sizes.
+// frame (the picture is the frame's width, or wider when the legend needs it). Throws
+// segslam::Error on wrong image types or sizes.
 cv::Mat DrawFeatureKinds(const cv::Mat& color_bgr, const cv::Mat& instance_ids,
                          const slam::FrameResult& result, const std::string& title);
 
