@@ -11,6 +11,7 @@ packages=(
   libyaml-cpp-dev libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev
   libtbb-dev libpng-dev libssl-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  chromium  # the HTML report is checked in a headless browser (scripts/check_report.sh)
 )
 
 missing=()
