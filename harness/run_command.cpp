@@ -97,7 +97,7 @@ int RunRun(const RunArgs& args) {
   options.map_out = args.map_out;
   options.camera_file = args.camera_file;
   options.frames = args.frames;
-  // One progress bar per pass, started at its first frame.
+  // One progress bar per pass; each pass's rate counts from the end of the previous one.
   std::optional<ProgressBar> bar;
   std::string bar_pass;
   auto start = std::chrono::steady_clock::now();
@@ -109,10 +109,10 @@ int RunRun(const RunArgs& args) {
       if (bar.has_value()) bar->Finish();
       bar.emplace(fmt::format("run {} {}", args.mode, pass));
       bar_pass = pass;
-      start = std::chrono::steady_clock::now();
     }
-    const double elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    bar->Update(done, total, done / std::max(elapsed_s, 1e-9));
+    const auto now = std::chrono::steady_clock::now();
+    bar->Update(done, total, done / std::max(std::chrono::duration<double>(now - start).count(), 1e-9));
+    if (done == total) start = now;
   };
   const std::vector<PassRun> passes = RunDataset(dataset, out_dir, options);
   if (bar.has_value()) bar->Finish();

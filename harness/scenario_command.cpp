@@ -170,6 +170,7 @@ int RunScenario(const ScenarioRunArgs& args) {
       options.seed = run.seed;
       std::optional<ProgressBar> bar;
       std::string bar_pass;
+      // Each pass's rate counts from the end of the previous pass (or the run's start).
       auto pass_start = std::chrono::steady_clock::now();
       options.on_frame = [&](const std::string& pass, int done, int total) {
         if (cancel->load()) throw Error("scenario run: cancelled");
@@ -178,10 +179,10 @@ int RunScenario(const ScenarioRunArgs& args) {
           if (bar.has_value()) bar->Finish();
           bar.emplace(fmt::format("[{}/{}] {} {}", done_runs + 1, total_runs, mode, pass));
           bar_pass = pass;
-          pass_start = std::chrono::steady_clock::now();
         }
-        const double elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - pass_start).count();
-        bar->Update(done, total, done / std::max(elapsed_s, 1e-9));
+        const auto now = std::chrono::steady_clock::now();
+        bar->Update(done, total, done / std::max(std::chrono::duration<double>(now - pass_start).count(), 1e-9));
+        if (done == total) pass_start = now;
       };
       const auto run_start = std::chrono::steady_clock::now();
       RunDataset(dataset, report_dir / run.run_dir, options);

@@ -98,11 +98,14 @@ std::string TableHtml(const Table& table) {
 }
 
 // "0.0123 [0.0101, 0.0150]" (median [min, max]); `scale` turns shares into percent.
+// Runs without a value are named: "0.0123 (2 of 3 runs)".
 std::string SpreadText(const Spread& s, int decimals, double scale = 1) {
   if (s.count == 0) return "n/a";
-  if (s.count == 1) return fmt::format("{:.{}f}", s.median * scale, decimals);
-  return fmt::format("{:.{}f} [{:.{}f}, {:.{}f}]", s.median * scale, decimals, s.min * scale, decimals,
-                     s.max * scale, decimals);
+  std::string text = s.count == 1 ? fmt::format("{:.{}f}", s.median * scale, decimals)
+                                  : fmt::format("{:.{}f} [{:.{}f}, {:.{}f}]", s.median * scale, decimals,
+                                                s.min * scale, decimals, s.max * scale, decimals);
+  if (s.count < s.runs) text += fmt::format(" ({} of {} runs)", s.count, s.runs);
+  return text;
 }
 
 const Spread* FindSpread(const SpreadTable& table, const std::string& pass, const std::string& mode,
@@ -147,7 +150,10 @@ std::vector<Table> ReportTables(const ScenarioReport& report) {
   }
   tables.push_back(ate);
 
-  Table rpe{"RPE rmse per second: translation [m] / rotation [deg]", spread_note, {"sequence"}, {}};
+  Table rpe{"RPE rmse per second: translation [m] / rotation [deg]",
+            spread_note + " n/a: fewer than 2 pose pairs 1 s apart (results.json: rpe.missing says why).",
+            {"sequence"},
+            {}};
   for (const auto& mode : modes) rpe.header.push_back(mode);
   for (const auto& pass : kPasses) {
     std::vector<std::string> row = {report.scenario_name + " " + pass};
@@ -387,8 +393,9 @@ std::vector<Expectation> ParseExpectations(const YAML::Node& expect, const std::
 }
 
 Spread SpreadOf(std::vector<double> values) {
-  values.erase(std::remove_if(values.begin(), values.end(), [](double v) { return std::isnan(v); }), values.end());
   Spread spread;
+  spread.runs = static_cast<int>(values.size());
+  values.erase(std::remove_if(values.begin(), values.end(), [](double v) { return std::isnan(v); }), values.end());
   spread.count = static_cast<int>(values.size());
   if (values.empty()) {
     spread.median = spread.min = spread.max = kNaN;
@@ -482,7 +489,7 @@ nlohmann::json ScenarioReport::ToJson() const {
   for (const auto& [pass, modes] : spreads) {
     for (const auto& [mode, metrics] : modes) {
       for (const auto& [metric, s] : metrics) {
-        json["summary"][pass][mode][metric] = {{"count", s.count}, {"median", NumberJson(s.median)},
+        json["summary"][pass][mode][metric] = {{"runs", s.runs}, {"count", s.count}, {"median", NumberJson(s.median)},
                                                {"min", NumberJson(s.min)}, {"max", NumberJson(s.max)}};
       }
     }

@@ -81,7 +81,8 @@ struct RepeatRun {
 };
 
 struct Spread {
-  int count = 0;  // runs with a value (not NaN)
+  int runs = 0;   // runs summarized
+  int count = 0;  // of which with a value (not NaN)
   double median = 0, min = 0, max = 0;  // NaN when count is 0
 };
 

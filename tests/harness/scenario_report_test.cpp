@@ -66,6 +66,7 @@ TEST(ScenarioReportTest, BoundsAreChecked) {
 TEST(ScenarioReportTest, SpreadIsNumpysMedianOverValuesThatExist) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const Spread spread = SpreadOf({4, 1, nan, 3, 2});
+  EXPECT_EQ(spread.runs, 5);
   EXPECT_EQ(spread.count, 4);
   EXPECT_DOUBLE_EQ(spread.median, 2.5);
   EXPECT_DOUBLE_EQ(spread.min, 1);
