@@ -35,9 +35,15 @@ PassRun RunPass(const DatasetRunOptions& args, const std::string& name, const fs
   outcome.run = RunSlamOnSequence(sequence, options);
 
   fs::create_directories(out_dir);
+  // The header says which masks gave the instance ids of frames.jsonl (eval needs it).
+  const std::string masks = args.mode == "plain"       ? "none"
+                            : !args.segmenter.empty()  ? fmt::format("simulated {} seed {}", args.segmenter, args.seed)
+                            : args.masks == "gt"       ? "gt"
+                                                       : "external " + args.masks;
   WriteTumTrajectory(out_dir / "trajectory.txt", outcome.run.trajectory,
-                     fmt::format("segslam run, mode {}, sequence {}\ncamera-to-world T_wc of localized frames",
-                                 args.mode, sequence_dir.string()));
+                     fmt::format("segslam run, mode {}, sequence {}\ninstance masks: {}\ncamera-to-world T_wc of "
+                                 "localized frames",
+                                 args.mode, sequence_dir.string(), masks));
   WriteFrameLog(out_dir / "frames.jsonl", outcome.run.frames);
   if (outcome.run.segmentation.has_value()) {
     const LoopSegmentationScores& scores = *outcome.run.segmentation;

@@ -1,6 +1,7 @@
 #include "harness/run_evaluation.h"
 
 #include <algorithm>
+#include <cstdint>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -11,6 +12,7 @@
 #include <fmt/format.h>
 
 #include "core/error.h"
+#include "core/image_io.h"
 #include "core/pose.h"
 #include "core/tracks.h"
 #include "core/tum_dataset.h"
@@ -37,6 +39,7 @@ struct LoggedInstance {
 struct LoggedFrame {
   int index = 0;
   double stamp_s = 0;
+  std::string rgb_file;  // the dataset's file of this frame (rgb.txt), set by MatchToSequence
   bool localized = false;
   std::vector<LoggedInstance> instances;
 };
@@ -72,16 +75,18 @@ std::vector<LoggedFrame> ReadFrameLog(const fs::path& path) {
   return frames;
 }
 
-// The mode that trajectory.txt's header names ("# segslam run, mode mutual, sequence ...").
-std::string ModeFromHeader(const fs::path& trajectory_file) {
+// A value of trajectory.txt's header: "# segslam run, mode mutual, sequence ..." gives
+// ("mode ", ",") -> "mutual"; "# instance masks: gt" gives ("instance masks: ", "") -> "gt".
+std::string HeaderValue(const fs::path& trajectory_file, const std::string& marker, const std::string& end_marker) {
   std::ifstream in(trajectory_file);
-  std::string first;
-  std::getline(in, first);
-  const std::string marker = ", mode ";
-  const auto start = first.find(marker);
-  if (start == std::string::npos) return "";
-  const auto end = first.find(',', start + marker.size());
-  return first.substr(start + marker.size(), end == std::string::npos ? std::string::npos : end - start - marker.size());
+  for (std::string line; std::getline(in, line) && line.rfind('#', 0) == 0;) {
+    const auto start = line.find(marker);
+    if (start == std::string::npos) continue;
+    const auto value_start = start + marker.size();
+    const auto end = end_marker.empty() ? std::string::npos : line.find(end_marker, value_start);
+    return line.substr(value_start, end == std::string::npos ? std::string::npos : end - value_start);
+  }
+  return "";
 }
 
 double NumberOrNaN(const nlohmann::json& json, const char* key) {
@@ -112,17 +117,93 @@ nlohmann::json StatisticsJson(const std::optional<ErrorStatistics>& s) {
 
 nlohmann::json NumberJson(double value) { return std::isnan(value) ? nlohmann::json(nullptr) : nlohmann::json(value); }
 
-// Every frame the run logged must be a frame of the dataset's sequence.
-void CheckSameSequence(const fs::path& frame_log, const std::vector<LoggedFrame>& frames, const fs::path& sequence_dir) {
-  std::vector<double> stamps;
-  for (const auto& [stamp, file] : ReadTumFileList(sequence_dir / "rgb.txt")) stamps.push_back(stamp);
-  for (const LoggedFrame& frame : frames) {
-    const auto above = std::lower_bound(stamps.begin(), stamps.end(), frame.stamp_s - kStampToleranceS);
-    if (above == stamps.end() || std::abs(*above - frame.stamp_s) > kStampToleranceS) {
+// Every frame the run logged must be a frame of the dataset's sequence; each gets its
+// rgb file (whose stem names its masks).
+void MatchToSequence(const fs::path& frame_log, std::vector<LoggedFrame>& frames, const fs::path& sequence_dir) {
+  const std::vector<std::pair<double, std::string>> rgb = ReadTumFileList(sequence_dir / "rgb.txt");
+  for (LoggedFrame& frame : frames) {
+    const auto above = std::lower_bound(rgb.begin(), rgb.end(), frame.stamp_s - kStampToleranceS,
+                                        [](const auto& entry, double stamp) { return entry.first < stamp; });
+    if (above == rgb.end() || std::abs(above->first - frame.stamp_s) > kStampToleranceS) {
       throw Error(fmt::format("eval: {}: frame {} (stamp {:.6f}) is not a frame of {}: the run is of another sequence",
                               frame_log.string(), frame.index, frame.stamp_s, sequence_dir.string()));
     }
+    frame.rgb_file = above->second;
   }
+}
+
+// The ground-truth instance that each instance of `run_ids` (CV_16U) covers most, by
+// pixels of `gt_ids` (CV_16U, same size) inside its region; 0 = background.
+std::map<int, int> DominantGroundTruthIds(const cv::Mat& run_ids, const cv::Mat& gt_ids) {
+  std::map<int, std::map<int, int>> overlap;  // run id -> gt id -> pixels
+  for (int y = 0; y < run_ids.rows; ++y) {
+    const auto* run_row = run_ids.ptr<std::uint16_t>(y);
+    const auto* gt_row = gt_ids.ptr<std::uint16_t>(y);
+    for (int x = 0; x < run_ids.cols; ++x) {
+      if (run_row[x] != 0) ++overlap[run_row[x]][gt_row[x]];
+    }
+  }
+  std::map<int, int> dominant;
+  for (const auto& [run_id, counts] : overlap) {
+    dominant[run_id] = std::max_element(counts.begin(), counts.end(), [](const auto& a, const auto& b) {
+                         return a.second < b.second;
+                       })->first;
+  }
+  return dominant;
+}
+
+// MovingDetectionScores (see the header for how instances relate to the ground truth).
+void ScoreMovingDetection(const std::vector<LoggedFrame>& frames, const fs::path& run_dir, const fs::path& sequence_dir,
+                          PassEvaluation* pass) {
+  const fs::path tracks_file = sequence_dir / "tracks.json";
+  if (!fs::exists(tracks_file)) {
+    pass->moving_missing_reason = "no tracks.json in " + sequence_dir.string();
+    return;
+  }
+  const fs::path refined_dir = run_dir / "refined_masks";
+  const bool by_overlap = fs::is_directory(refined_dir);
+  const bool same_ids = !by_overlap && (pass->masks == "gt" || pass->masks == "none" || pass->masks.empty());
+  if (!by_overlap && !same_ids) {
+    pass->moving_missing_reason = "instance ids of '" + pass->masks + "' carry no ground-truth identity and the run "
+                                  "saved no masks to relate them";
+    return;
+  }
+  std::map<std::pair<int, int>, bool> truly_moving;  // (instance id, frame) -> moving
+  for (const ObjectTrack& track : ReadTracks(tracks_file)) {
+    for (const TrackSample& sample : track.samples) truly_moving[{track.instance_id, sample.frame}] = sample.moving;
+  }
+  MovingDetectionScores scores;
+  for (const LoggedFrame& frame : frames) {
+    const bool any_judged = std::any_of(frame.instances.begin(), frame.instances.end(),
+                                        [](const LoggedInstance& instance) { return instance.judged; });
+    if (!any_judged) continue;
+    std::map<int, int> gt_id_of;
+    if (by_overlap) {
+      const std::string stem = fs::path(frame.rgb_file).stem().string();
+      const fs::path run_mask = refined_dir / (stem + ".png");
+      const fs::path gt_mask = sequence_dir / "masks" / (stem + ".png");
+      const cv::Mat run_ids = ReadInstanceMask(run_mask);
+      const cv::Mat gt_ids = ReadInstanceMask(gt_mask);
+      if (run_ids.size() != gt_ids.size()) throw FileError(run_mask, "eval: size differs from " + gt_mask.string());
+      gt_id_of = DominantGroundTruthIds(run_ids, gt_ids);
+    }
+    for (const LoggedInstance& instance : frame.instances) {
+      if (!instance.judged) continue;
+      int gt_id = instance.id;
+      if (by_overlap) {
+        const auto found = gt_id_of.find(instance.id);
+        gt_id = found == gt_id_of.end() ? 0 : found->second;
+      }
+      const auto found = truly_moving.find({gt_id, frame.index});
+      const bool moving = found != truly_moving.end() && found->second;
+      if (instance.moving) {
+        ++(moving ? scores.true_positives : scores.false_positives);
+      } else {
+        ++(moving ? scores.false_negatives : scores.true_negatives);
+      }
+    }
+  }
+  pass->moving = scores;
 }
 
 PassEvaluation EvaluatePass(const std::string& name, const fs::path& run_dir, const fs::path& sequence_dir,
@@ -143,9 +224,10 @@ PassEvaluation EvaluatePass(const std::string& name, const fs::path& run_dir, co
                 " an output folder of segslam run?");
   }
   const fs::path frame_log = run_dir / "frames.jsonl";
-  const std::vector<LoggedFrame> frames = ReadFrameLog(frame_log);
-  CheckSameSequence(frame_log, frames, sequence_dir);
-  pass.mode = ModeFromHeader(trajectory_file);
+  std::vector<LoggedFrame> frames = ReadFrameLog(frame_log);
+  MatchToSequence(frame_log, frames, sequence_dir);
+  pass.mode = HeaderValue(trajectory_file, ", mode ", ",");
+  pass.masks = HeaderValue(trajectory_file, "instance masks: ", "");
   pass.frames = static_cast<int>(frames.size());
   pass.localized_frames =
       static_cast<int>(std::count_if(frames.begin(), frames.end(), [](const LoggedFrame& f) { return f.localized; }));
@@ -203,27 +285,7 @@ PassEvaluation EvaluatePass(const std::string& name, const fs::path& run_dir, co
   }
 
   // Moving-object detection over judged instances (MovingDetectionScores).
-  const fs::path tracks_file = sequence_dir / "tracks.json";
-  if (fs::exists(tracks_file)) {
-    std::map<std::pair<int, int>, bool> truly_moving;  // (instance id, frame) -> moving
-    for (const ObjectTrack& track : ReadTracks(tracks_file)) {
-      for (const TrackSample& sample : track.samples) truly_moving[{track.instance_id, sample.frame}] = sample.moving;
-    }
-    MovingDetectionScores scores;
-    for (const LoggedFrame& frame : frames) {
-      for (const LoggedInstance& instance : frame.instances) {
-        if (!instance.judged) continue;
-        const auto found = truly_moving.find({instance.id, frame.index});
-        const bool moving = found != truly_moving.end() && found->second;
-        if (instance.moving) {
-          ++(moving ? scores.true_positives : scores.false_positives);
-        } else {
-          ++(moving ? scores.false_negatives : scores.true_negatives);
-        }
-      }
-    }
-    pass.moving = scores;
-  }
+  ScoreMovingDetection(frames, run_dir, sequence_dir, &pass);
   return pass;
 }
 
@@ -258,6 +320,7 @@ nlohmann::json PassEvaluation::ToJson() const {
       {"run_dir", run_dir.string()},
       {"sequence", sequence_dir.string()},
       {"mode", mode},
+      {"masks", masks},
       {"frames", frames},
       {"localized_frames", localized_frames},
       {"localized_share", LocalizedShare()},
@@ -278,6 +341,7 @@ nlohmann::json PassEvaluation::ToJson() const {
          {{"mAP", NumberJson(seg_refined->mAP)}, {"AP50", NumberJson(seg_refined->AP50)},
           {"mIoU", NumberJson(seg_refined->mIoU)}}}};
   }
+  if (!moving.has_value()) json["moving_detection"] = {{"missing", moving_missing_reason}};
   if (moving.has_value()) {
     json["moving_detection"] = {{"judged", moving->Judged()},
                                 {"true_positives", moving->true_positives},
@@ -329,6 +393,9 @@ std::string RunEvaluation::Table() const {
     }
   }
 
+  for (const PassEvaluation& p : passes) {
+    if (!p.moving.has_value()) text += fmt::format("{}: no moving-object scores: {}\n", p.name, p.moving_missing_reason);
+  }
   const bool any_moving = std::any_of(passes.begin(), passes.end(), [](const auto& p) { return p.moving.has_value(); });
   if (any_moving) {
     text += fmt::format("\nMoving-object detection over judged instances vs tracks.json\n{:<8} {:>7} {:>9} {:>7} "

@@ -33,9 +33,17 @@ namespace segslam::harness {
 // Moving-object detection, counted over instance judgements: every (frame, instance)
 // that SLAM judged (frames.jsonl: "judged": true, i.e. it had enough measured points to
 // decide) is one sample; its prediction is frames.jsonl's "moving", its truth the
-// `moving` flag of that instance's tracks.json sample at that frame (an instance without
-// a sample there, e.g. a mask region of no tracked object, counts as not moving).
-// Instances SLAM did not judge are not counted: they are neither detections nor misses.
+// `moving` flag in tracks.json of the ground-truth instance at that frame. Which
+// ground-truth instance that is depends on the masks SLAM saw (trajectory.txt's header):
+// - the dataset's masks ("gt"): the same id;
+// - a segmenter's masks refined in the mutual loop: the ground-truth id (background
+//   included) with the most pixels inside the instance's region of the refined mask SLAM
+//   judged (refined_masks/<stem>.png against the dataset's masks/<stem>.png), since a
+//   segmenter's ids carry no ground-truth identity;
+// - a segmenter's masks that were not saved: not scored (absent, with the reason).
+// A ground-truth instance without a tracks.json sample at that frame, and background,
+// count as not moving. Instances SLAM did not judge are not counted: they are neither
+// detections nor misses.
 struct MovingDetectionScores {
   int true_positives = 0;   // judged moving, truly moving
   int false_positives = 0;  // judged moving, truly static
@@ -73,8 +81,11 @@ struct PassEvaluation {
   std::optional<MaskScores> seg_raw, seg_refined;      // from seg.json
   std::string segmenter;                               // seg.json's segmenter
 
-  // Absent when the sequence has no tracks.json (a real TUM sequence).
+  // Absent when the sequence has no tracks.json (a real TUM sequence), or when the run's
+  // instance ids cannot be related to the ground truth (moving_missing_reason).
   std::optional<MovingDetectionScores> moving;
+  std::string moving_missing_reason;
+  std::string masks;  // trajectory.txt's "instance masks:" line; "" in older runs
 
   nlohmann::json ToJson() const;
 };

@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -129,10 +130,12 @@ int RunScenario(const ScenarioRunArgs& args) {
 
   // The dataset, generated once per effective scenario and code version. The generator
   // writes into a staging folder and renames it, so an existing folder is complete.
+  std::fflush(stdout);
   ScenarioReport report;
   report.dataset_from_cache = IsTwoPassDataset(dataset);
   if (report.dataset_from_cache) {
     fmt::print("dataset {} (cached)\n", dataset.string());
+    std::fflush(stdout);
   } else {
     fs::create_directories(dataset.parent_path());
     generate_options.overwrite = true;  // a folder there that is not a dataset is replaced
@@ -196,6 +199,7 @@ int RunScenario(const ScenarioRunArgs& args) {
         line += fmt::format("  {} ATE {} localized {:.0f}%", pass.name, Metres(pass.ate_m), 100 * pass.LocalizedShare());
       }
       fmt::print("{}  ({:.1f} s)\n", line, run.seconds);
+      std::fflush(stdout);  // a CI log shows each run as it ends
       report.runs.push_back(std::move(run));
     }
   }
