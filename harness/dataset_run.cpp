@@ -5,6 +5,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "slam/tracker_option_overrides.h"
 
 namespace segslam::harness {
 
@@ -26,6 +27,7 @@ PassRun RunPass(const DatasetRunOptions& args, const std::string& name, const fs
   if (RunsMutualLoop(args)) options.refined_masks_dir = out_dir / "refined_masks";
   options.map_in = map_in;
   options.max_frames = args.frames;
+  for (const std::string& assignment : args.tracker_options) slam::SetTrackerOption(&options.tracker, assignment);
   options.on_frame = [&](int done, int total) {
     if (args.on_frame) args.on_frame(name, done, total);
   };
@@ -94,7 +96,9 @@ bool RunsMutualLoop(const DatasetRunOptions& options) {
 }
 
 std::vector<PassRun> RunDataset(const fs::path& dataset, const fs::path& out_dir, const DatasetRunOptions& options) {
-  slam::ParseSlamMode(options.mode);  // a bad mode fails before anything is read or written
+  slam::ParseSlamMode(options.mode);  // a bad mode or tracker option fails before anything is read or written
+  slam::TrackerOptions checked;
+  for (const std::string& assignment : options.tracker_options) slam::SetTrackerOption(&checked, assignment);
   if (!options.segmenter.empty() && options.masks != "gt") {
     throw Error("run: --segmenter " + options.segmenter + " and --masks " + options.masks + " exclude each other");
   }

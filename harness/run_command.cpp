@@ -20,6 +20,7 @@
 #include "harness/slam_runner.h"
 #include "harness/trajectory_metrics.h"
 #include "seg/simulated_segmenter.h"
+#include "slam/tracker_option_overrides.h"
 
 namespace segslam::harness {
 
@@ -38,6 +39,7 @@ struct RunArgs {
   std::string out_dir;
   std::string camera_file;
   int frames = 0;
+  std::vector<std::string> tracker_options;  // NAME=VALUE overrides of slam::TrackerOptions
   bool quiet = false;
 };
 
@@ -78,6 +80,8 @@ void PrintLoopSegmentation(const std::vector<PassRun>& passes) {
 
 int RunRun(const RunArgs& args) {
   slam::ParseSlamMode(args.mode);  // a bad mode fails before anything is read or written
+  slam::TrackerOptions checked;
+  for (const std::string& assignment : args.tracker_options) slam::SetTrackerOption(&checked, assignment);
   if (!args.segmenter.empty() && args.masks != "gt") {
     throw Error("run: --segmenter " + args.segmenter + " and --masks " + args.masks + " exclude each other");
   }
@@ -97,6 +101,7 @@ int RunRun(const RunArgs& args) {
   options.map_out = args.map_out;
   options.camera_file = args.camera_file;
   options.frames = args.frames;
+  options.tracker_options = args.tracker_options;
   // One progress bar per pass; each pass's rate counts from the end of the previous one.
   std::optional<ProgressBar> bar;
   std::string bar_pass;
@@ -148,6 +153,8 @@ void AddRunCommand(CLI::App& app, std::function<int()>* action) {
   cmd->add_option("--frames", args->frames, "Only the first N frames of each sequence (0 = all)");
   cmd->add_option("--camera", args->camera_file,
                   "camera.yaml to use instead of the sequence's own (for a real sequence without one)");
+  cmd->add_option("--tracker", args->tracker_options,
+                  "Override a tracker option, NAME=VALUE (repeatable; see slam/tracker.h)");
   cmd->add_flag("-q,--quiet", args->quiet, "No progress bar");
   cmd->callback([args, action] { *action = [args] { return RunRun(*args); }; });
 }

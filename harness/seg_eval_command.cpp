@@ -42,6 +42,7 @@ struct SegEvalArgs {
   bool object_motion = true;
   std::string out_dir;
   std::vector<std::string> refiner_options;  // NAME=VALUE overrides of RefinerOptions
+  std::vector<std::string> segmenter_options;  // NAME=VALUE overrides of the preset
 };
 
 // The sequences of a dataset: pass1/ and pass2/ of a generated one, or the directory
@@ -118,6 +119,7 @@ seg::SequenceSegEval EvaluateSequence(const SegEvalArgs& args, const fs::path& d
   } else {
     seg::SimulatedSegmenterOptions options = seg::SimulatedSegmenterOptions::Preset(args.segmenter);
     options.strength = args.strength;
+    for (const std::string& assignment : args.segmenter_options) options.Set(assignment);
     segmenter = std::make_unique<seg::SimulatedSegmenter>(dir, options, args.seed, args.segmenter);
   }
 
@@ -221,6 +223,8 @@ void AddSegEvalCommand(CLI::App& app, std::function<int()>* action) {
   command->add_option("--poses", args->poses, "Camera poses for the refinement: gt")->capture_default_str();
   command->add_flag("!--no-object-motion", args->object_motion,
                     "Project moving objects with the camera motion only (as the paper)");
+  command->add_option("--segmenter-option", args->segmenter_options,
+                      "Override a simulated segmenter option, NAME=VALUE (repeatable; see seg/simulated_segmenter.h)");
   command->add_option("--refiner", args->refiner_options,
                       "Override a refiner option, NAME=VALUE (repeatable; see seg/refiner.h)");
   command->add_option("--out", args->out_dir, "Where to write seg_eval.json and pictures "

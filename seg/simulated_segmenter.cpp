@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <stdexcept>
 #include <utility>
 
 #include <fmt/format.h>
@@ -264,6 +265,81 @@ SimulatedSegmenterOptions SimulatedSegmenterOptions::Preset(const std::string& n
 
 std::vector<std::string> SimulatedSegmenterOptions::PresetNames() {
   return {"clean", "fcis-like", "mask-rcnn-like", "poor"};
+}
+
+namespace {
+
+// The tunable fields by name; one table serves Set() and FieldNames().
+std::map<std::string, double*> DoubleFields(SimulatedSegmenterOptions* o) {
+  return {{"strength", &o->strength},
+          {"miss_prob", &o->miss_prob},
+          {"miss_small_prob", &o->miss_small_prob},
+          {"small_area_fraction", &o->small_area_fraction},
+          {"miss_truncated_prob", &o->miss_truncated_prob},
+          {"miss_occluded_prob", &o->miss_occluded_prob},
+          {"miss_moving_prob", &o->miss_moving_prob},
+          {"difficulty_sd", &o->difficulty_sd},
+          {"hole_prob", &o->hole_prob},
+          {"hole_radius_fraction", &o->hole_radius_fraction},
+          {"cut_prob", &o->cut_prob},
+          {"cut_fraction_max", &o->cut_fraction_max},
+          {"bleed_prob", &o->bleed_prob},
+          {"bleed_fraction_max", &o->bleed_fraction_max},
+          {"bleed_blob_prob", &o->bleed_blob_prob},
+          {"boundary_jitter_fraction", &o->boundary_jitter_fraction},
+          {"boundary_jitter_px", &o->boundary_jitter_px},
+          {"boundary_jitter_scale_fraction", &o->boundary_jitter_scale_fraction},
+          {"confusion_prob", &o->confusion_prob},
+          {"false_positives_per_frame", &o->false_positives_per_frame},
+          {"false_positive_area_min", &o->false_positive_area_min},
+          {"false_positive_area_max", &o->false_positive_area_max},
+          {"score_iou_weight", &o->score_iou_weight},
+          {"score_noise_sd", &o->score_noise_sd},
+          {"confusion_score_factor", &o->confusion_score_factor},
+          {"false_positive_score_max", &o->false_positive_score_max}};
+}
+
+std::map<std::string, int*> IntFields(SimulatedSegmenterOptions* o) {
+  return {{"min_area_px", &o->min_area_px},
+          {"occlusion_window", &o->occlusion_window},
+          {"hole_count_max", &o->hole_count_max}};
+}
+
+}  // namespace
+
+void SimulatedSegmenterOptions::Set(const std::string& assignment) {
+  const size_t eq = assignment.find('=');
+  if (eq == std::string::npos) throw Error("segmenter option: expected NAME=VALUE, got '" + assignment + "'");
+  const std::string name = assignment.substr(0, eq), text = assignment.substr(eq + 1);
+  double value = 0;
+  try {
+    size_t used = 0;
+    value = std::stod(text, &used);
+    if (used != text.size()) throw std::invalid_argument(text);
+  } catch (const std::exception&) {
+    throw Error("segmenter option " + name + ": not a number: '" + text + "'");
+  }
+  const auto doubles = DoubleFields(this);
+  const auto ints = IntFields(this);
+  if (auto it = doubles.find(name); it != doubles.end()) {
+    *it->second = value;
+  } else if (auto it = ints.find(name); it != ints.end()) {
+    if (value != std::floor(value)) throw Error("segmenter option " + name + ": not a whole number: '" + text + "'");
+    *it->second = static_cast<int>(value);
+  } else {
+    std::string known;
+    for (const std::string& field : FieldNames()) known += (known.empty() ? "" : ", ") + field;
+    throw Error("segmenter option: unknown field '" + name + "' (known: " + known + ")");
+  }
+}
+
+std::vector<std::string> SimulatedSegmenterOptions::FieldNames() {
+  SimulatedSegmenterOptions scratch;
+  std::vector<std::string> names;
+  for (const auto& [name, field] : DoubleFields(&scratch)) names.push_back(name);
+  for (const auto& [name, field] : IntFields(&scratch)) names.push_back(name);
+  std::sort(names.begin(), names.end());
+  return names;
 }
 
 SimulatedSegmenterOptions SimulatedSegmenterOptions::Effective() const {

@@ -141,6 +141,13 @@ struct SimulatedSegmenterOptions {
   static SimulatedSegmenterOptions Preset(const std::string& name);
   static std::vector<std::string> PresetNames();
 
+  // Sets the field `name` (as spelled in this struct, e.g. "miss_truncated_prob") from
+  // "name=value", for tuning and sweeps (seg-eval --segmenter-option). Integer fields
+  // take whole numbers only. Throws segslam::Error naming the field on an unknown name or
+  // a value that is not a number; ranges are checked later by IsValid().
+  void Set(const std::string& assignment);
+  static std::vector<std::string> FieldNames();
+
   // The options with `strength` applied: rates and magnitudes multiplied by it
   // (probabilities clamped to 1), strength set to 1. Strength 0 gives clean output.
   SimulatedSegmenterOptions Effective() const;

@@ -44,6 +44,17 @@ std::string ToString(TrackingStatus status) {
   return "?";
 }
 
+std::string ToString(FeatureKind kind) {
+  switch (kind) {
+    case FeatureKind::kUsed: return "used";
+    case FeatureKind::kUnmatched: return "unmatched";
+    case FeatureKind::kOutlier: return "outlier";
+    case FeatureKind::kDroppedMoving: return "dropped-moving";
+    case FeatureKind::kDroppedMoveable: return "dropped-moveable";
+  }
+  return "?";
+}
+
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -231,6 +242,33 @@ struct Tracker::Impl {
   bool judged = false;
   FrameResult result;
   Clock::time_point frame_start;
+  // Features DropMoveableFeatures() removed from `current` (record_features only).
+  std::vector<FeatureRecord> dropped_moveable_records;
+
+  // One record per feature of the frame: those dropped before tracking, then the
+  // current features by what the fine pose made of them.
+  std::vector<FeatureRecord> FeatureRecords() const {
+    std::map<std::uint16_t, bool> moving_of;
+    for (const InstanceJudgement& judgement : result.instances) moving_of[judgement.id] = judgement.moving;
+    std::vector<FeatureRecord> records = dropped_moveable_records;
+    records.reserve(records.size() + current.features.size());
+    for (size_t i = 0; i < current.features.size(); ++i) {
+      FeatureRecord record;
+      record.pixel = current.features.keypoints[i].pt;
+      record.instance_id = current.instance[i];
+      if (current.excluded[i]) {
+        const auto judged = moving_of.find(record.instance_id);
+        record.kind = judged != moving_of.end() && judged->second ? FeatureKind::kDroppedMoving
+                                                                  : FeatureKind::kDroppedMoveable;
+      } else if (current.points[i] != nullptr) {
+        record.kind = current.outlier[i] ? FeatureKind::kOutlier : FeatureKind::kUsed;
+      } else {
+        record.kind = current.rejected[i] != nullptr ? FeatureKind::kOutlier : FeatureKind::kUnmatched;
+      }
+      records.push_back(record);
+    }
+    return records;
+  }
 
   bool last_lost() const { return last_status_lost; }
 
@@ -875,6 +913,7 @@ void Tracker::BeginFrame(const RgbdFrame& frame) {
   s.current.instance.assign(n, 0);
   s.current.excluded.assign(n, false);
   s.coarse_ok = s.fine_ok = s.judged = false;
+  s.dropped_moveable_records.clear();
   s.result = FrameResult();
   s.result.frame_index = frame.index;
   s.result.stamp_s = frame.stamp_s;
@@ -897,7 +936,12 @@ void Tracker::DropMoveableFeatures(const FrameInstances& instances) {
                           static_cast<int>(std::lround(all.keypoints[i].pt.y)));
     const std::uint16_t id = instances.ids.at<std::uint16_t>(std::clamp(pixel.y, 0, camera_.height - 1),
                                                             std::clamp(pixel.x, 0, camera_.width - 1));
-    if (id != 0 && instances.moveable_ids.count(id) > 0) continue;
+    if (id != 0 && instances.moveable_ids.count(id) > 0) {
+      if (options_.record_features) {
+        s.dropped_moveable_records.push_back({all.keypoints[i].pt, id, FeatureKind::kDroppedMoveable});
+      }
+      continue;
+    }
     rows.push_back(static_cast<int>(i));
     kept.keypoints.push_back(all.keypoints[i]);
     kept.depth_m.push_back(all.depth_m[i]);
@@ -1067,6 +1111,7 @@ std::optional<Eigen::Isometry3d> Tracker::EstimateFinePose() {
   }
   s.result.num_fine_inliers = inliers;
   if (s.coarse_ok && !s.fine_ok) s.result.status = TrackingStatus::kLost;
+  if (options_.record_features) s.result.feature_records = s.FeatureRecords();
   s.result.timings.fine_ms = MsSince(start);
   if (!s.fine_ok) return std::nullopt;
   s.result.T_wc = s.current.T_cw.inverse();

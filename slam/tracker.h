@@ -74,6 +74,26 @@ struct InstanceJudgement {
   double moving_share = 0;      // num_moving_points / num_points
 };
 
+// What became of one feature of a frame (TrackerOptions::record_features), for pictures
+// such as the paper's Fig. 6 and for counting where features went.
+enum class FeatureKind : std::uint8_t {
+  kUsed,             // matched to a map point and an inlier of the frame's last pose optimisation
+  kUnmatched,        // no map point matched it (it may seed a new point)
+  kOutlier,          // matched, but the robust pose optimisation rejected the match
+  kDroppedMoving,    // on an instance judged moving (mutual): kept out of the fine pose
+  kDroppedMoveable,  // on a moveable-class instance: removed before tracking (mask-moveable),
+                     // or not judged yet (mutual)
+};
+std::string ToString(FeatureKind kind);
+
+struct FeatureRecord {
+  cv::Point2f pixel;              // keypoint position (u, v) in level-0 pixels
+  // Instance under the keypoint as the step that used masks saw it: 0 = background, or no
+  // mask consulted (plain mode; features kept by mask-moveable).
+  std::uint16_t instance_id = 0;
+  FeatureKind kind = FeatureKind::kUnmatched;
+};
+
 struct FrameTimings {
   double features_ms = 0;
   double coarse_ms = 0;
@@ -98,6 +118,9 @@ struct FrameResult {
   std::vector<InstanceJudgement> instances;
   FrameTimings timings;
   bool localized() const { return status != TrackingStatus::kLost; }
+  // One record per extracted feature (num_features of them), filled by EstimateFinePose()
+  // only when TrackerOptions::record_features is set.
+  std::vector<FeatureRecord> feature_records;
 };
 
 struct TrackerOptions {
@@ -151,6 +174,8 @@ struct TrackerOptions {
   int long_term_min_observations = 2;
   // Pose of the first frame when no map is loaded (the map's frame).
   Eigen::Isometry3d initial_T_wc = Eigen::Isometry3d::Identity();
+  // Fill FrameResult::feature_records (costs a few kB per frame; off for plain runs).
+  bool record_features = false;
 };
 
 class Tracker {

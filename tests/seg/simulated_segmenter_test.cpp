@@ -502,3 +502,24 @@ TEST_F(SimulatedSegmenterSequenceTest, BadMasksGiveClearErrors) {
 
 }  // namespace
 }  // namespace segslam::seg
+
+namespace segslam::seg {
+namespace {
+
+TEST(SimulatedSegmenterOptionsTest, SetByNameChangesOnlyThatField) {
+  SimulatedSegmenterOptions options = SimulatedSegmenterOptions::Preset("fcis-like");
+  options.Set("miss_truncated_prob=0.25");
+  options.Set("hole_count_max=5");
+  EXPECT_DOUBLE_EQ(options.miss_truncated_prob, 0.25);
+  EXPECT_EQ(options.hole_count_max, 5);
+  EXPECT_DOUBLE_EQ(options.miss_prob, SimulatedSegmenterOptions().miss_prob);
+  for (const char* bad : {"miss_truncated=0.2", "miss_prob=often", "hole_count_max=2.5", "miss_prob"}) {
+    EXPECT_THROW(options.Set(bad), Error) << bad;
+  }
+  const std::vector<std::string> names = SimulatedSegmenterOptions::FieldNames();
+  EXPECT_TRUE(std::is_sorted(names.begin(), names.end()));
+  EXPECT_NE(std::find(names.begin(), names.end(), "false_positive_area_max"), names.end());
+}
+
+}  // namespace
+}  // namespace segslam::seg

@@ -1,0 +1,98 @@
+#include "slam/tracker_option_overrides.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <stdexcept>
+
+#include "core/error.h"
+
+namespace segslam::slam {
+
+namespace {
+
+// Every overridable field as a setter from a number; one table serves both functions.
+using Setter = void (*)(TrackerOptions*, double);
+
+int WholeNumber(const char* name, double value) {
+  if (value != std::floor(value)) throw Error(std::string("tracker option ") + name + ": not a whole number");
+  return static_cast<int>(value);
+}
+
+bool ZeroOrOne(const char* name, double value) {
+  if (value != 0 && value != 1) throw Error(std::string("tracker option ") + name + ": expected 0 or 1");
+  return value == 1;
+}
+
+#define SEGSLAM_REAL(field) {#field, [](TrackerOptions* o, double v) { o->field = static_cast<decltype(o->field)>(v); }}
+#define SEGSLAM_INT(field) {#field, [](TrackerOptions* o, double v) { o->field = WholeNumber(#field, v); }}
+#define SEGSLAM_BOOL(field) {#field, [](TrackerOptions* o, double v) { o->field = ZeroOrOne(#field, v); }}
+
+const std::map<std::string, Setter>& Setters() {
+  static const std::map<std::string, Setter> setters = {
+      SEGSLAM_INT(orb.max_features),
+      SEGSLAM_REAL(orb.scale_factor),
+      SEGSLAM_INT(orb.levels),
+      SEGSLAM_INT(orb.initial_fast_threshold),
+      SEGSLAM_INT(orb.min_fast_threshold),
+      SEGSLAM_INT(orb.cell_size_px),
+      SEGSLAM_REAL(depth_sigma_at_1m),
+      SEGSLAM_REAL(max_point_depth_m),
+      SEGSLAM_INT(max_descriptor_distance),
+      SEGSLAM_INT(strict_descriptor_distance),
+      SEGSLAM_REAL(projection_ratio),
+      SEGSLAM_REAL(relocalization_ratio),
+      SEGSLAM_REAL(last_frame_radius_px),
+      SEGSLAM_REAL(local_map_radius_px),
+      SEGSLAM_INT(min_tracking_inliers),
+      SEGSLAM_INT(min_relocalization_inliers),
+      SEGSLAM_REAL(keyframe_tracked_ratio),
+      SEGSLAM_INT(max_frames_between_keyframes),
+      SEGSLAM_REAL(close_depth_m),
+      SEGSLAM_BOOL(local_bundle_adjustment),
+      SEGSLAM_INT(local_ba_keyframes),
+      SEGSLAM_REAL(moving_distance_m),
+      SEGSLAM_REAL(moving_distance_per_m),
+      SEGSLAM_REAL(moving_reprojection_px),
+      SEGSLAM_REAL(motion_baseline_s),
+      SEGSLAM_INT(min_points_to_judge),
+      SEGSLAM_REAL(moving_share_threshold),
+      SEGSLAM_INT(long_term_min_observations),
+  };
+  return setters;
+}
+
+#undef SEGSLAM_REAL
+#undef SEGSLAM_INT
+#undef SEGSLAM_BOOL
+
+}  // namespace
+
+void SetTrackerOption(TrackerOptions* options, const std::string& assignment) {
+  const size_t eq = assignment.find('=');
+  if (eq == std::string::npos) throw Error("tracker option: expected NAME=VALUE, got '" + assignment + "'");
+  const std::string name = assignment.substr(0, eq), text = assignment.substr(eq + 1);
+  const auto setter = Setters().find(name);
+  if (setter == Setters().end()) {
+    std::string known;
+    for (const std::string& n : TrackerOptionNames()) known += (known.empty() ? "" : ", ") + n;
+    throw Error("tracker option: unknown field '" + name + "' (known: " + known + ")");
+  }
+  double value = 0;
+  try {
+    size_t used = 0;
+    value = std::stod(text, &used);
+    if (used != text.size()) throw std::invalid_argument(text);
+  } catch (const std::exception&) {
+    throw Error("tracker option " + name + ": not a number: '" + text + "'");
+  }
+  setter->second(options, value);
+}
+
+std::vector<std::string> TrackerOptionNames() {
+  std::vector<std::string> names;
+  for (const auto& [name, setter] : Setters()) names.push_back(name);
+  return names;  // std::map keeps them sorted
+}
+
+}  // namespace segslam::slam
