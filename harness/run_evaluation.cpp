@@ -250,7 +250,7 @@ PassEvaluation EvaluatePass(const std::string& name, const fs::path& run_dir, co
     try {
       const AteResult ate = ComputeAte(ground_truth, moved, ate_options);
       pass.ate_m = ate.translation_m;
-      pass.T_gt_est = ate.T_gt_est;
+      pass.T_gt_est = fixed_alignment.has_value() ? *fixed_alignment : ate.T_gt_est;
     } catch (const Error& e) {
       pass.ate_missing_reason = e.what();
     }

@@ -71,6 +71,7 @@ struct PassEvaluation {
   // ATE; absent (with the reason) when fewer poses than needed were estimated.
   std::optional<ErrorStatistics> ate_m;
   bool ate_aligned = true;  // false: scored in pass 1's aligned frame
+  // The transform applied to the estimate before scoring: Horn's, or pass 1's.
   Eigen::Isometry3d T_gt_est = Eigen::Isometry3d::Identity();
   std::string ate_missing_reason;
 

@@ -8,6 +8,8 @@
 //   results.json  every run's metrics, the medians/min/max, the checks, the scenario,
 //                 seeds, code version and machine
 //   report.md, report.html  the tables in the layout of the paper's
+//   scenario.yaml           the effective scenario (every key, overrides applied)
+//   figures/                top views of both passes (the paper's Fig. 4)
 //   runs/<mode>/<seed>/     each run's outputs, as `segslam run` writes them
 // Exit code: 0 when every expectation passes, 2 when one fails, 1 on an error.
 #include <algorithm>
@@ -150,6 +152,7 @@ int RunScenario(const ScenarioRunArgs& args) {
 
   // Each run's outputs; stale ones from an earlier report in the same place go first.
   fs::remove_all(report_dir / "runs");
+  fs::remove_all(report_dir / "figures");
   fs::create_directories(report_dir / "runs");
   int total_runs = 0;
   for (const std::string& mode : bench.modes) total_runs += bench.ModeIsDeterministic(mode) ? 1 : bench.repeats;
@@ -215,10 +218,11 @@ int RunScenario(const ScenarioRunArgs& args) {
   report.spreads = Summarize(report.runs);
   report.checks = CheckExpectations(expectations, report.spreads);
   report.report_dir = report_dir;
-  // FIGURES GO HERE: draw harness/report_figures' pictures into report_dir, under the
-  // file names of scenario_report.cpp's PlannedFigures(), before the documents below.
+  // Figures before the documents, which show each figure that exists.
+  for (const std::string& problem : DrawReportFigures(report)) fmt::print("figure not drawn: {}\n", problem);
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
+  WriteFileAtomically(report_dir / "scenario.yaml", report.effective_scenario_yaml + "\n");
   WriteFileAtomically(report_dir / "results.json", report.ToJson().dump(2) + "\n");
   WriteFileAtomically(report_dir / "report.md", report.ToMarkdown());
   WriteFileAtomically(report_dir / "report.html", report.ToHtml());

@@ -12,6 +12,8 @@
 #include <fmt/format.h>
 
 #include "core/error.h"
+#include "core/pose.h"
+#include "harness/report_figures.h"
 #include "seg/simulated_segmenter.h"
 
 namespace segslam::harness {
@@ -46,9 +48,7 @@ std::vector<std::string> Split(const std::string& text, char separator) {
 
 nlohmann::json NumberJson(double value) { return std::isnan(value) ? nlohmann::json(nullptr) : nlohmann::json(value); }
 
-// --- Tables rendered as Markdown and as HTML ---------------------------------------
-// (A stand-in until harness/report_figures' document builder (branch report-figures)
-// is merged; it only needs titles, headers and cells.)
+// A table of the report with its heading and note, added to a ReportDocument.
 struct Table {
   std::string title;
   std::string note;
@@ -56,46 +56,7 @@ struct Table {
   std::vector<std::vector<std::string>> rows;
 };
 
-std::string EscapeHtml(const std::string& text) {
-  std::string out;
-  for (const char c : text) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
-
-std::string TableMarkdown(const Table& table) {
-  std::string text = "### " + table.title + "\n\n";
-  if (!table.note.empty()) text += table.note + "\n\n";
-  text += "| " + Join(table.header, " | ") + " |\n|";
-  for (std::size_t i = 0; i < table.header.size(); ++i) text += i == 0 ? " --- |" : " ---: |";
-  text += "\n";
-  for (const auto& row : table.rows) text += "| " + Join(row, " | ") + " |\n";
-  return text + "\n";
-}
-
-std::string TableHtml(const Table& table) {
-  std::string text = "<h3>" + EscapeHtml(table.title) + "</h3>\n";
-  if (!table.note.empty()) text += "<p>" + EscapeHtml(table.note) + "</p>\n";
-  text += "<table>\n<tr>";
-  for (const auto& cell : table.header) text += "<th>" + EscapeHtml(cell) + "</th>";
-  text += "</tr>\n";
-  for (const auto& row : table.rows) {
-    text += "<tr>";
-    for (const auto& cell : row) {
-      const std::string css = cell == "PASS" ? " class=\"pass\"" : cell == "FAIL" ? " class=\"fail\"" : "";
-      text += "<td" + css + ">" + EscapeHtml(cell) + "</td>";
-    }
-    text += "</tr>\n";
-  }
-  return text + "</table>\n";
-}
+std::string EscapeXml(const std::string& text) { return EscapeHtml(text); }
 
 // "0.0123 [0.0101, 0.0150]" (median [min, max]); `scale` turns shares into percent.
 // Runs without a value are named: "0.0123 (2 of 3 runs)".
@@ -236,20 +197,22 @@ std::vector<Table> ReportTables(const ScenarioReport& report) {
   return tables;
 }
 
-// Pictures of the report, relative to the report directory. They come from
-// harness/report_figures (branch report-figures: top-view trajectories as the paper's
-// Fig. 4, raw vs refined mask overlays as Fig. 5, matched features kept vs dropped as
-// Fig. 6). FIGURES GO HERE: once that API is merged, scenario_command.cpp draws them
-// into these files after the runs; the report shows each one that exists.
+// Pictures of the report, relative to the report directory, drawn by DrawReportFigures
+// with harness/report_figures.h. The mask comparison (Fig. 5) and the features kept vs
+// dropped (Fig. 6) are planned here but not drawn yet: they need the segmenter's raw
+// masks of a frame and the tracker's feature records (TrackerOptions::record_features),
+// which `scenario run` does not keep; the report shows each figure whose file exists.
 struct PlannedFigure {
   std::string file;
   std::string caption;
 };
 std::vector<PlannedFigure> PlannedFigures() {
-  return {{"figures/trajectories_pass1.png", "Top view: ground truth and each mode's pass-1 trajectory (Fig. 4)"},
-          {"figures/trajectories_pass2.png", "Top view: pass 2 localized on pass 1's map (Fig. 4)"},
-          {"figures/masks_raw_vs_refined.png", "Raw vs refined masks of the mutual loop (Fig. 5)"},
-          {"figures/features_kept_vs_dropped.png", "Matched features kept vs dropped as moving (Fig. 6)"}};
+  return {{"figures/trajectories_pass1.png",
+           "Top view of pass 1: ground truth and, per mode, the run of median ATE, aligned (as the paper's Fig. 4)"},
+          {"figures/trajectories_pass2.png",
+           "Top view of pass 2, localized on pass 1's map, in pass 1's aligned frame (as the paper's Fig. 4)"},
+          {"figures/masks_raw_vs_refined.png", "Raw vs refined masks of the mutual loop (as the paper's Fig. 5)"},
+          {"figures/features_kept_vs_dropped.png", "Matched features kept vs dropped as moving (as the paper's Fig. 6)"}};
 }
 
 // The planned figures whose files exist in the report directory.
@@ -504,77 +467,95 @@ nlohmann::json ScenarioReport::ToJson() const {
   return json;
 }
 
-std::string ScenarioReport::ToMarkdown() const {
-  std::string text = fmt::format("# segslam scenario report: {}\n\n", scenario_name);
-  text += fmt::format("- scenario file: `{}`{}\n", scenario_file,
-                      overrides.empty() ? "" : ", overrides `" + Join(overrides, "`, `") + "`");
-  text += fmt::format("- code version: `{}`\n", code_version);
+ReportDocument ScenarioReport::ToDocument() const {
+  ReportDocument document("segslam scenario report: " + scenario_name);
+  document.AddMetadata("scenario file", scenario_file + (overrides.empty() ? "" : ", overrides " + Join(overrides, " ")));
+  document.AddMetadata("code version", code_version);
   const nlohmann::json machine = MachineDescription();
-  text += fmt::format("- machine: {}, {}, {} cores\n", machine["hostname"].get<std::string>(),
-                      machine["cpu_model"].get<std::string>(), machine["cores"].get<unsigned>());
-  text += fmt::format("- dataset: `{}`{}{}\n", dataset_dir, dataset_from_cache ? " (from the cache)" : "",
-                      frames_per_pass > 0 ? fmt::format(", first {} frames per pass", frames_per_pass) : "");
-  text += fmt::format("- modes {}, {} repeat(s), segmenter {} with seeds {}..{}; deterministic modes ran once\n",
-                      Join(bench.modes, ", "), bench.repeats, bench.segmenter, bench.seed,
-                      bench.seed + static_cast<std::uint64_t>(bench.repeats) - 1);
-  text += fmt::format("- {} in {:.1f} s\n\n", StatusLine(*this), seconds);
-  for (const Table& table : ReportTables(*this)) text += TableMarkdown(table);
-  text += "### Figures\n\n";
+  document.AddMetadata("machine", fmt::format("{}, {}, {} cores", machine["hostname"].get<std::string>(),
+                                              machine["cpu_model"].get<std::string>(), machine["cores"].get<unsigned>()));
+  document.AddMetadata("dataset", dataset_dir + (dataset_from_cache ? " (from the cache)" : "") +
+                                      (frames_per_pass > 0 ? fmt::format(", first {} frames per pass", frames_per_pass) : ""));
+  document.AddMetadata("bench", fmt::format("modes {}, {} repeat(s), segmenter {} with seeds {}..{}; deterministic modes "
+                                            "ran once",
+                                            Join(bench.modes, ", "), bench.repeats, bench.segmenter, bench.seed,
+                                            bench.seed + static_cast<std::uint64_t>(bench.repeats) - 1));
+  document.AddMetadata("result", fmt::format("{} in {:.1f} s", StatusLine(*this), seconds));
+  for (const Table& table : ReportTables(*this)) {
+    document.AddHeading(table.title, 3);
+    if (!table.note.empty()) document.AddParagraph(table.note);
+    document.AddTable(ReportTable{"", table.header, table.rows});
+  }
+  document.AddHeading("Figures", 3);
   const std::vector<PlannedFigure> figures = PresentFigures(report_dir);
-  for (const PlannedFigure& figure : figures) text += fmt::format("![{}]({})\n\n{}\n\n", figure.caption, figure.file, figure.caption);
-  if (figures.empty()) text += "None drawn: this build does not draw figures yet (harness/report_figures).\n\n";
-  text += "### Effective scenario\n\n```yaml\n" + effective_scenario_yaml + "\n```\n";
-  return text;
+  for (const PlannedFigure& figure : figures) document.AddImage(figure.file, figure.caption);
+  if (figures.empty()) document.AddParagraph("None drawn.");
+  document.AddHeading("Effective scenario", 3);
+  document.AddParagraph("scenario.yaml beside this report holds every key of the scenario that ran, defaults and "
+                        "--set overrides included (also in results.json).");
+  return document;
 }
 
-std::string ScenarioReport::ToHtml() const {
-  std::string text =
-      "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>segslam: " + EscapeHtml(scenario_name) +
-      "</title>\n<style>body{font-family:sans-serif;max-width:70em;margin:2em auto;}table{border-collapse:collapse;"
-      "margin-bottom:1em;}td,th{border:1px solid #bbb;padding:0.2em 0.6em;text-align:right;}"
-      "td:first-child,th:first-child{text-align:left;}.pass{background:#cfc;}.fail{background:#fcc;}"
-      "pre{background:#f4f4f4;padding:0.5em;}</style></head><body>\n";
-  text += "<h1>segslam scenario report: " + EscapeHtml(scenario_name) + "</h1>\n<ul>\n";
-  text += "<li>scenario file: <code>" + EscapeHtml(scenario_file) + "</code>" +
-          (overrides.empty() ? "" : ", overrides <code>" + EscapeHtml(Join(overrides, " ")) + "</code>") + "</li>\n";
-  text += "<li>code version: <code>" + EscapeHtml(code_version) + "</code></li>\n";
-  const nlohmann::json machine = MachineDescription();
-  text += "<li>machine: " +
-          EscapeHtml(fmt::format("{}, {}, {} cores", machine["hostname"].get<std::string>(),
-                                 machine["cpu_model"].get<std::string>(), machine["cores"].get<unsigned>())) +
-          "</li>\n";
-  text += "<li>dataset: <code>" + EscapeHtml(dataset_dir) + "</code>" + (dataset_from_cache ? " (from the cache)" : "") +
-          "</li>\n";
-  text += "<li>" +
-          EscapeHtml(fmt::format("modes {}, {} repeat(s), segmenter {} with seeds {}..{}; deterministic modes ran once",
-                                 Join(bench.modes, ", "), bench.repeats, bench.segmenter, bench.seed,
-                                 bench.seed + static_cast<std::uint64_t>(bench.repeats) - 1)) +
-          "</li>\n";
-  text += "<li>" + EscapeHtml(fmt::format("{} in {:.1f} s", StatusLine(*this), seconds)) + "</li>\n</ul>\n";
-  for (const Table& table : ReportTables(*this)) text += TableHtml(table);
-  text += "<h3>Figures</h3>\n";
-  const std::vector<PlannedFigure> figures = PresentFigures(report_dir);
-  for (const PlannedFigure& figure : figures) {
-    text += "<figure><img src=\"" + EscapeHtml(figure.file) + "\" style=\"max-width:100%\"><figcaption>" +
-            EscapeHtml(figure.caption) + "</figcaption></figure>\n";
+std::string ScenarioReport::ToMarkdown() const { return ToDocument().ToMarkdown(); }
+
+std::string ScenarioReport::ToHtml() const { return ToDocument().ToHtml(); }
+
+std::vector<std::string> DrawReportFigures(const ScenarioReport& report) {
+  std::vector<std::string> problems;
+  for (const std::string& pass : kPasses) {
+    const std::string file = "figures/trajectories_" + pass + ".png";
+    try {
+      NamedTrajectory ground_truth{"ground truth",
+                                   ReadTumTrajectory(std::filesystem::path(report.dataset_dir) / pass / "groundtruth.txt")};
+      std::vector<NamedTrajectory> estimates;
+      for (const std::string& mode : report.bench.modes) {
+        // The run whose ATE is nearest the median over repeats stands for its mode.
+        const Spread* spread = FindSpread(report.spreads, pass, mode, "ate_rmse_m");
+        const RepeatRun* chosen = nullptr;
+        const PassEvaluation* chosen_pass = nullptr;
+        double best = std::numeric_limits<double>::infinity();
+        for (const RepeatRun& run : report.runs) {
+          if (run.mode != mode) continue;
+          for (const PassEvaluation& evaluation : run.evaluation.passes) {
+            if (evaluation.name != pass || !evaluation.ate_m.has_value() || spread == nullptr) continue;
+            const double distance = std::abs(evaluation.ate_m->rmse - spread->median);
+            if (distance < best) {
+              best = distance;
+              chosen = &run;
+              chosen_pass = &evaluation;
+            }
+          }
+        }
+        if (chosen == nullptr) continue;
+        std::vector<StampedPose> poses =
+            ReadTumTrajectory(report.report_dir / chosen->run_dir / pass / "trajectory.txt");
+        for (StampedPose& pose : poses) pose.T_wc = chosen_pass->T_gt_est * pose.T_wc;
+        estimates.push_back({report.bench.ModeIsDeterministic(mode) ? mode : fmt::format("{} (seed {})", mode, chosen->seed),
+                             std::move(poses)});
+      }
+      TopViewOptions options;
+      options.title = fmt::format("{} {}: top view", report.scenario_name, pass);
+      std::filesystem::create_directories(report.report_dir / "figures");
+      WriteFigure(report.report_dir / file, DrawTopView(options, ground_truth, estimates).image);
+    } catch (const Error& e) {
+      problems.push_back(file + ": " + e.what());
+    }
   }
-  if (figures.empty()) text += "<p>None drawn: this build does not draw figures yet (harness/report_figures).</p>\n";
-  text += "<h3>Effective scenario</h3>\n<pre>" + EscapeHtml(effective_scenario_yaml) + "</pre>\n";
-  return text + "</body></html>\n";
+  return problems;
 }
 
 std::string ScenarioReport::ToJUnitXml() const {
   const auto failures = std::count_if(checks.begin(), checks.end(), [](const auto& c) { return !c.passed; });
   std::string text = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
   text += fmt::format("<testsuites>\n<testsuite name=\"{}\" tests=\"{}\" failures=\"{}\" errors=\"0\" time=\"{:.3f}\">\n",
-                      EscapeHtml("segslam scenario " + scenario_name), checks.size(), failures, seconds);
+                      EscapeXml("segslam scenario " + scenario_name), checks.size(), failures, seconds);
   for (const ExpectationResult& r : checks) {
     text += fmt::format("  <testcase classname=\"{}\" name=\"{}\" time=\"0\">",
-                        EscapeHtml("segslam.scenario." + scenario_name),
-                        EscapeHtml(r.expectation.name.text + " " + r.expectation.Bounds()));
+                        EscapeXml("segslam.scenario." + scenario_name),
+                        EscapeXml(r.expectation.name.text + " " + r.expectation.Bounds()));
     if (!r.passed) {
       text += fmt::format("<failure message=\"{}\"/>",
-                          EscapeHtml(fmt::format("median over repeats {} not {}", ValueText(r.value), r.expectation.Bounds())));
+                          EscapeXml(fmt::format("median over repeats {} not {}", ValueText(r.value), r.expectation.Bounds())));
     }
     text += "</testcase>\n";
   }

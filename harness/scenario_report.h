@@ -25,6 +25,7 @@
 #include <nlohmann/json.hpp>
 #include <yaml-cpp/yaml.h>
 
+#include "harness/report_document.h"
 #include "harness/run_evaluation.h"
 
 namespace segslam::harness {
@@ -122,10 +123,17 @@ struct ScenarioReport {
   std::filesystem::path report_dir;  // where figures are looked for (not written out)
 
   nlohmann::json ToJson() const;
+  // The tables (and the figures present in report_dir) as one document.
+  ReportDocument ToDocument() const;
   std::string ToMarkdown() const;
   std::string ToHtml() const;
   // One testcase per expectation.
   std::string ToJUnitXml() const;
 };
+
+// Draws the report's figures into report.report_dir/figures/ (top views of both passes,
+// as the paper's Fig. 4). A figure that cannot be drawn is skipped; the returned lines
+// say which and why.
+std::vector<std::string> DrawReportFigures(const ScenarioReport& report);
 
 }  // namespace segslam::harness

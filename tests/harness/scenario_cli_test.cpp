@@ -83,7 +83,10 @@ TEST_F(ScenarioCliTest, TinyRunWritesTheReportAndItsExitCodeFollowsTheThresholds
   std::printf("%s", pass.stdout_text.c_str());
   ASSERT_EQ(pass.exit_code, 0) << pass.stdout_text << pass.stderr_text;
   EXPECT_NE(pass.stdout_text.find("3 of 3 expectations passed"), std::string::npos);
-  for (const char* file : {"results.json", "report.md", "report.html"}) EXPECT_TRUE(fs::exists(report / file)) << file;
+  for (const char* file : {"results.json", "report.md", "report.html", "figures/trajectories_pass1.png",
+                           "figures/trajectories_pass2.png"}) {
+    EXPECT_TRUE(fs::exists(report / file)) << file;
+  }
 
   const nlohmann::json results = nlohmann::json::parse(ReadText(report / "results.json"));
   EXPECT_EQ(results["scenario"], "office_small");
@@ -97,9 +100,10 @@ TEST_F(ScenarioCliTest, TinyRunWritesTheReportAndItsExitCodeFollowsTheThresholds
   EXPECT_EQ(results["summary"]["pass1"]["mutual"]["ate_rmse_m"]["count"], 2);
   EXPECT_EQ(results["runs"][2]["evaluation"]["passes"][0]["frames"], 25);
   const std::string markdown = ReadText(report / "report.md");
-  EXPECT_NE(markdown.find("ATE rmse [m] per sequence and mode"), std::string::npos);
+  EXPECT_NE(markdown.find("per sequence and mode (as the paper's Table I)"), std::string::npos);
   EXPECT_NE(markdown.find("Relocalization in pass 2"), std::string::npos);
   EXPECT_NE(markdown.find("raw vs refined"), std::string::npos);
+  EXPECT_NE(markdown.find("figures/trajectories_pass2.png"), std::string::npos);
   const std::string xml = ReadText(junit);
   EXPECT_EQ(Count(xml, "<testcase "), 3) << xml;
   EXPECT_EQ(Count(xml, "<failure"), 0) << xml;
