@@ -56,6 +56,7 @@ struct Table {
   std::vector<std::vector<std::string>> rows;
 };
 
+// XML needs the same five entities as HTML text.
 std::string EscapeXml(const std::string& text) { return EscapeHtml(text); }
 
 // "0.0123 [0.0101, 0.0150]" (median [min, max]); `scale` turns shares into percent.
