@@ -150,7 +150,10 @@ int RunScenario(const ScenarioRunArgs& args) {
     fmt::print("dataset {}: generated {} frames in {:.1f} s\n", dataset.string(), summary.frames, summary.seconds);
   }
 
-  // Each run's outputs; stale ones from an earlier report in the same place go first.
+  // An earlier report in the same place goes first, so a run that stops half-way leaves
+  // no results.json that looks complete.
+  for (const char* stale : {"results.json", "report.md", "report.html", "scenario.yaml"}) fs::remove(report_dir / stale);
+  if (!args.junit_file.empty()) fs::remove(args.junit_file);
   fs::remove_all(report_dir / "runs");
   fs::remove_all(report_dir / "figures");
   fs::create_directories(report_dir / "runs");
