@@ -26,6 +26,8 @@ int RunCli(int argc, char** argv) {
   AddSegEvalCommand(app, &action);
   AddEvalTrajCommand(app, &action);
   AddRunCommand(app, &action);
+  AddEvalCommand(app, &action);
+  AddScenarioCommand(app, &action);
 
   try {
     app.parse(argc, argv);

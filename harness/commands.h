@@ -14,5 +14,7 @@ void AddPreviewCommand(CLI::App& app, std::function<int()>* action);
 void AddSegEvalCommand(CLI::App& app, std::function<int()>* action);
 void AddEvalTrajCommand(CLI::App& app, std::function<int()>* action);
 void AddRunCommand(CLI::App& app, std::function<int()>* action);
+void AddEvalCommand(CLI::App& app, std::function<int()>* action);
+void AddScenarioCommand(CLI::App& app, std::function<int()>* action);
 
 }  // namespace segslam::harness

@@ -3,6 +3,7 @@
 // relocalization protocol). In mutual mode with a segmenter (--segmenter or --masks DIR)
 // it runs the paper's loop, writes the refined masks and, on a sequence with ground-truth
 // masks, scores raw vs refined masks with SLAM's poses.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -15,6 +16,7 @@
 #include "harness/commands.h"
 #include "harness/interrupt.h"
 #include "harness/progress_bar.h"
+#include "harness/dataset_run.h"
 #include "harness/slam_runner.h"
 #include "harness/trajectory_metrics.h"
 #include "seg/simulated_segmenter.h"
@@ -41,89 +43,13 @@ struct RunArgs {
   bool quiet = false;
 };
 
-struct PassOutcome {
-  SlamRunResult run;
-  std::optional<AteResult> ate;
-};
-
-PassOutcome RunPass(const RunArgs& args, const fs::path& sequence_dir, const fs::path& map_in,
-                    const fs::path& map_out, const fs::path& out_dir,
-                    const std::optional<Eigen::Isometry3d>& fixed_alignment) {
-  std::optional<SequenceCamera> camera;
-  if (!args.camera_file.empty()) camera = ReadCameraYaml(args.camera_file);
-  const TumSequence sequence = TumSequence::Open(sequence_dir, camera);
-  SlamRunOptions options;
-  options.mode = slam::ParseSlamMode(args.mode);
-  options.masks = args.masks;
-  options.segmenter = args.segmenter;
-  options.segmenter_seed = args.seed;
-  const bool mutual_loop = options.mode == slam::SlamMode::kMutual && (!args.segmenter.empty() || args.masks != "gt");
-  if (mutual_loop) options.refined_masks_dir = out_dir / "refined_masks";
-  options.map_in = map_in;
-  options.max_frames = args.frames;
-  for (const std::string& assignment : args.tracker_options) slam::SetTrackerOption(&options.tracker, assignment);
-  ProgressBar bar(fmt::format("run {} {}", args.mode, sequence_dir.filename().string()));
-  const std::atomic<bool>* cancel = InstallInterruptFlag();
-  const auto start = std::chrono::steady_clock::now();
-  options.on_frame = [&](int done, int total) {
-    if (cancel->load()) throw Error("run: cancelled");
-    if (args.quiet) return;
-    const double elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    bar.Update(done, total, done / elapsed_s);
-  };
-  PassOutcome outcome;
-  outcome.run = RunSlamOnSequence(sequence, options);
-  if (!args.quiet) bar.Finish();
-
-  fs::create_directories(out_dir);
-  WriteTumTrajectory(out_dir / "trajectory.txt", outcome.run.trajectory,
-                     fmt::format("segslam run, mode {}, sequence {}\ncamera-to-world T_wc of localized frames",
-                                 args.mode, sequence_dir.string()));
-  WriteFrameLog(out_dir / "frames.jsonl", outcome.run.frames);
-  if (outcome.run.segmentation.has_value()) {
-    const LoopSegmentationScores& scores = *outcome.run.segmentation;
-    const nlohmann::json json = {
-        {"sequence", sequence_dir.string()},
-        {"segmenter", scores.segmenter},
-        {"seed", args.seed},
-        {"poses", "slam"},
-        {"frames", outcome.run.frames.size()},
-        {"refined_from_previous_frames", scores.refined_from_previous},
-        {"raw", scores.raw.ToJson()},
-        {"refined", scores.refined.ToJson()},
-        {"refine_ms_median", scores.refine_ms_median},
-        {"decisions",
-         {{"new", scores.decision_counts[0]},
-          {"kept", scores.decision_counts[1]},
-          {"replaced", scores.decision_counts[2]},
-          {"added", scores.decision_counts[3]},
-          {"dropped", scores.decision_counts[4]}}}};
-    WriteFileAtomically(out_dir / "seg.json", json.dump(2) + "\n");
-  }
-  if (!map_out.empty()) {
-    slam::SaveLongTermMap(map_out, outcome.run.long_term_map);
-    fs::path ply = map_out;
-    ply.replace_extension(".ply");
-    slam::ExportPly(ply, outcome.run.long_term_map);
-  }
-  if (sequence.has_groundtruth() && outcome.run.trajectory.size() >= 3) {
-    AteOptions ate_options;
-    std::vector<StampedPose> estimate = outcome.run.trajectory;
-    if (fixed_alignment.has_value()) {
-      ate_options.align = false;
-      for (StampedPose& pose : estimate) pose.T_wc = *fixed_alignment * pose.T_wc;
-    }
-    outcome.ate = ComputeAte(sequence.groundtruth(), estimate, ate_options);
-  }
-  return outcome;
-}
-
-void PrintPass(const std::string& name, const PassOutcome& pass, bool aligned) {
+void PrintPass(const PassRun& pass) {
   const SlamRunResult& run = pass.run;
-  fmt::print("{:<8} {:>6} {:>9.1f}% {:>9} {:>9} {:>10.2f}", name, run.frames.size(), 100 * run.LocalizedShare(),
+  fmt::print("{:<8} {:>6} {:>9.1f}% {:>9} {:>9} {:>10.2f}", pass.name, run.frames.size(), 100 * run.LocalizedShare(),
              run.keyframes, run.map_points, run.MedianTrackingMs());
   if (pass.ate.has_value()) {
-    fmt::print(" {:>10.4f} {:>10.4f}  {}\n", pass.ate->translation_m.rmse, pass.ate->translation_m.max, aligned ? "aligned" : "map frame");
+    fmt::print(" {:>10.4f} {:>10.4f}  {}\n", pass.ate->translation_m.rmse, pass.ate->translation_m.max,
+               pass.aligned ? "aligned" : "map frame");
   } else {
     fmt::print(" {:>10} {:>10}\n", "n/a", "n/a");
   }
@@ -132,9 +58,9 @@ void PrintPass(const std::string& name, const PassOutcome& pass, bool aligned) {
 std::string Points(double value) { return std::isnan(value) ? "  n/a" : fmt::format("{:5.1f}", 100 * value); }
 
 // The segmentation-in-the-loop table, as seg-eval prints it with ground-truth poses.
-void PrintLoopSegmentation(const std::vector<std::pair<std::string, PassOutcome>>& passes) {
+void PrintLoopSegmentation(const std::vector<PassRun>& passes) {
   bool header = false;
-  for (const auto& [name, pass] : passes) {
+  for (const PassRun& pass : passes) {
     if (!pass.run.segmentation.has_value()) continue;
     const LoopSegmentationScores& s = *pass.run.segmentation;
     if (!header) {
@@ -144,7 +70,7 @@ void PrintLoopSegmentation(const std::vector<std::pair<std::string, PassOutcome>
       fmt::print("{:<8} {:>6} | {:^20} | {:^20} | {:^20}\n", "", "", "raw", "refined", "refined - raw");
       header = true;
     }
-    fmt::print("{:<8} {:>6} | {} {} {} | {} {} {} | {} {} {}\n", name, pass.run.frames.size(), Points(s.raw.mAP),
+    fmt::print("{:<8} {:>6} | {} {} {} | {} {} {} | {} {} {}\n", pass.name, pass.run.frames.size(), Points(s.raw.mAP),
                Points(s.raw.AP50), Points(s.raw.mIoU), Points(s.refined.mAP), Points(s.refined.AP50),
                Points(s.refined.mIoU), Points(s.refined.mAP - s.raw.mAP), Points(s.refined.AP50 - s.raw.AP50),
                Points(s.refined.mIoU - s.raw.mIoU));
@@ -161,30 +87,43 @@ int RunRun(const RunArgs& args) {
   }
   const fs::path dataset(args.dataset);
   const fs::path out_dir = args.out_dir.empty() ? dataset / ("run_" + args.mode) : fs::path(args.out_dir);
-  const bool two_pass = fs::is_directory(dataset / "pass1") && fs::is_directory(dataset / "pass2");
   const std::string masks = args.mode == "plain"        ? "none"
                             : !args.segmenter.empty()   ? "simulated " + args.segmenter + fmt::format(" (seed {})", args.seed)
                                                         : args.masks;
   fmt::print("segslam run: mode {}, masks {}{}\n", args.mode, masks,
              args.mode == "mutual" && masks != "gt" ? ", refined in the loop" : "");
-  std::vector<std::pair<std::string, PassOutcome>> passes;
-  if (two_pass) {
-    if (!args.map_in.empty()) throw Error("run: --map-in applies to a single sequence; " + args.dataset + " has two passes");
-    const fs::path map1 = args.map_out.empty() ? out_dir / "pass1" / "map.segslam" : fs::path(args.map_out);
-    fs::create_directories(map1.parent_path().empty() ? fs::path(".") : map1.parent_path());
-    passes.emplace_back("pass1", RunPass(args, dataset / "pass1", {}, map1, out_dir / "pass1", std::nullopt));
-    // Pass 2 is scored in the map's frame: pass 1's alignment to the ground truth, not
-    // a new one (the paper's Table III).
-    std::optional<Eigen::Isometry3d> alignment;
-    if (passes[0].second.ate.has_value()) alignment = passes[0].second.ate->T_gt_est;
-    passes.emplace_back("pass2", RunPass(args, dataset / "pass2", map1, {}, out_dir / "pass2", alignment));
-  } else {
-    passes.emplace_back(dataset.filename().string(),
-                        RunPass(args, dataset, args.map_in, args.map_out, out_dir, std::nullopt));
-  }
+  DatasetRunOptions options;
+  options.mode = args.mode;
+  options.masks = args.masks;
+  options.segmenter = args.segmenter;
+  options.seed = args.seed;
+  options.map_in = args.map_in;
+  options.map_out = args.map_out;
+  options.camera_file = args.camera_file;
+  options.frames = args.frames;
+  options.tracker_options = args.tracker_options;
+  // One progress bar per pass; each pass's rate counts from the end of the previous one.
+  std::optional<ProgressBar> bar;
+  std::string bar_pass;
+  auto start = std::chrono::steady_clock::now();
+  const std::atomic<bool>* cancel = InstallInterruptFlag();
+  options.on_frame = [&](const std::string& pass, int done, int total) {
+    if (cancel->load()) throw Error("run: cancelled");
+    if (args.quiet) return;
+    if (!bar.has_value() || bar_pass != pass) {
+      if (bar.has_value()) bar->Finish();
+      bar.emplace(fmt::format("run {} {}", args.mode, pass));
+      bar_pass = pass;
+    }
+    const auto now = std::chrono::steady_clock::now();
+    bar->Update(done, total, done / std::max(std::chrono::duration<double>(now - start).count(), 1e-9));
+    if (done == total) start = now;
+  };
+  const std::vector<PassRun> passes = RunDataset(dataset, out_dir, options);
+  if (bar.has_value()) bar->Finish();
   fmt::print("\n{:<8} {:>6} {:>10} {:>9} {:>9} {:>10} {:>10} {:>10}\n", "sequence", "frames", "localized",
              "keyframes", "points", "track ms", "ATE rmse m", "ATE max m");
-  for (const auto& [name, pass] : passes) PrintPass(name, pass, !(two_pass && name == "pass2"));
+  for (const PassRun& pass : passes) PrintPass(pass);
   PrintLoopSegmentation(passes);
   fmt::print("outputs in {}\n", out_dir.string());
   return 0;

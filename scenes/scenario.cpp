@@ -373,6 +373,8 @@ Scenario ParseScenario(const std::string& yaml_text, const std::string& origin) 
     const std::string key = KeyText(top.first);
     if (key == "expect") {
       s.expect = YAML::Clone(top.second);
+    } else if (key == "bench") {
+      s.bench = YAML::Clone(top.second);
     } else if (IsSection(key)) {
       if (top.second.IsNull()) continue;
       if (!top.second.IsMap()) throw KeyError(origin, key, "expected a mapping");
@@ -429,6 +431,7 @@ YAML::Node ScenarioToYaml(const Scenario& scenario) {
     }
   }
   if (scenario.expect && !scenario.expect.IsNull()) root["expect"] = YAML::Clone(scenario.expect);
+  if (scenario.bench && !scenario.bench.IsNull()) root["bench"] = YAML::Clone(scenario.bench);
   return root;
 }
 

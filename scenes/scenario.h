@@ -75,9 +75,11 @@ struct Scenario {
   SecondPassSpec pass2;
   CitySpec city;
   OfficeSpec office;
-  // Blocks that later layers read (e.g. `expect:` thresholds for the harness); kept
-  // verbatim so scenes/ need not know their schema.
+  // Blocks that later layers read, kept verbatim so scenes/ need not know their schema
+  // and no part of the world depends on them: `expect:` (thresholds that `segslam
+  // scenario run` checks) and `bench:` (its modes, repeats, segmenter and seed).
   YAML::Node expect;
+  YAML::Node bench;
   std::string text;  // the file's bytes, copied into datasets as provenance
 };
 
@@ -94,8 +96,8 @@ Scenario ParseScenario(const std::string& yaml_text, const std::string& origin);
 // errors as a file would. On success `scenario.text` holds the edited YAML.
 void ApplyOverride(Scenario& scenario, const std::string& dotted_key, const std::string& value);
 
-// The full effective configuration (every key, defaults included, plus `expect`), for
-// reports that echo what ran. ParseScenario(Dump(ScenarioToYaml(s))) reproduces s.
+// The full effective configuration (every key, defaults included, plus `expect` and
+// `bench`), for reports that echo what ran. ParseScenario(Dump(ScenarioToYaml(s))) reproduces s.
 YAML::Node ScenarioToYaml(const Scenario& scenario);
 
 // Builds the world the scenario describes. Deterministic in scenario.seed.

@@ -119,6 +119,17 @@ TEST(ScenarioTest, ExpectIsKeptVerbatim) {
   EXPECT_DOUBLE_EQ(s.expect["ate_m"]["max"].as<double>(), 0.1);
 }
 
+// `bench:` belongs to `segslam scenario run`; the world must not depend on it.
+TEST(ScenarioTest, BenchIsKeptVerbatimAndLeavesTheWorldAlone) {
+  const Scenario plain = ParseScenario("kind: office\nseed: 3\n", "b.yaml");
+  const Scenario with_bench =
+      ParseScenario("kind: office\nseed: 3\nbench: {modes: [plain, mutual], repeats: 4}\n", "b.yaml");
+  ASSERT_TRUE(with_bench.bench.IsMap());
+  EXPECT_EQ(with_bench.bench["repeats"].as<int>(), 4);
+  EXPECT_TRUE(ScenarioToYaml(with_bench)["bench"].IsMap());
+  EXPECT_EQ(BuildWorld(plain).objects.size(), BuildWorld(with_bench).objects.size());
+}
+
 TEST(ScenarioTest, ApplyOverrideSetsValuesWithTheSameChecks) {
   Scenario s = LoadScenario(ScenarioPath("city_two_pass.yaml"));
   ApplyOverride(s, "city.moving_cars", "8");

@@ -1,0 +1,62 @@
+// Runs the SLAM core over a dataset the way `segslam run` does and writes its outputs:
+// a single TUM-layout sequence, or both passes of a generated dataset (pass 1 builds the
+// long-term map, pass 2 localizes on it: the paper's relocalization protocol). Shared by
+// `segslam run` and `segslam scenario run`, so both leave the same layout behind:
+//   OUT/[passN/]trajectory.txt   TUM, camera-to-world T_wc of the localized frames
+//   OUT/[passN/]frames.jsonl     one JSON line per frame (harness/slam_runner.h)
+//   OUT/[passN/]seg.json         raw vs refined masks (mutual loop with ground-truth masks)
+//   OUT/[passN/]refined_masks/   the loop's refined masks
+//   OUT/pass1/map.segslam (+ .ply)  the long-term map of pass 1
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "harness/slam_runner.h"
+#include "harness/trajectory_metrics.h"
+
+namespace segslam::harness {
+
+struct DatasetRunOptions {
+  std::string mode = "mutual";  // plain, mask-moveable or mutual (slam::ParseSlamMode)
+  std::string masks = "gt";     // "gt" or a folder of external masks
+  std::string segmenter;        // simulated segmenter preset; empty = none
+  std::uint64_t seed = 1;       // the simulated segmenter's seed
+  std::filesystem::path map_in;   // single sequence only: localize on this map
+  std::filesystem::path map_out;  // where the (pass-1) long-term map goes; empty = default
+  std::string camera_file;        // camera.yaml overriding the sequence's own
+  int frames = 0;                 // first N frames of each sequence (0 = all)
+  // NAME=VALUE overrides of slam::TrackerOptions (slam/tracker_option_overrides.h).
+  std::vector<std::string> tracker_options;
+  // Called after each frame with the pass's name, (done, total); may throw to cancel.
+  std::function<void(const std::string&, int, int)> on_frame;
+};
+
+// One sequence's run. `ate` is set where the sequence has ground truth and >= 3 poses
+// were estimated: pass 1 (or a single sequence) aligned by Horn's method, pass 2 moved by
+// pass 1's alignment and not re-aligned (scored in the map's frame, the paper's Table III).
+struct PassRun {
+  std::string name;  // "pass1", "pass2", or the sequence folder's name
+  SlamRunResult run;
+  std::optional<AteResult> ate;
+  bool aligned = true;
+};
+
+// True when `dataset` holds pass1/ and pass2/.
+bool IsTwoPassDataset(const std::filesystem::path& dataset);
+
+// The mutual loop runs (and refines masks) in mutual mode with a segmenter or external masks.
+bool RunsMutualLoop(const DatasetRunOptions& options);
+
+// Runs every pass and writes the outputs above under `out_dir`. Throws segslam::Error on
+// bad options (a mode that does not exist, --segmenter with external masks, --map-in on
+// a two-pass dataset) before anything is written, and on unreadable input naming the file.
+std::vector<PassRun> RunDataset(const std::filesystem::path& dataset, const std::filesystem::path& out_dir,
+                                const DatasetRunOptions& options);
+
+}  // namespace segslam::harness

@@ -1,0 +1,479 @@
+#include "harness/run_evaluation.h"
+
+#include <algorithm>
+#include <cstdint>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <sstream>
+#include <utility>
+
+#include <fmt/format.h>
+
+#include "core/error.h"
+#include "core/image_io.h"
+#include "core/pose.h"
+#include "core/tracks.h"
+#include "core/tum_dataset.h"
+#include "harness/dataset_run.h"
+
+namespace segslam::harness {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kDegreesPerRadian = 180.0 / 3.14159265358979323846;
+// frames.jsonl stores stamps as doubles, rgb.txt with 6 decimals: a frame of the dataset
+// agrees to well under this.
+constexpr double kStampToleranceS = 1e-4;
+
+struct LoggedInstance {
+  int id = 0;
+  bool judged = false;
+  bool moving = false;
+};
+
+struct LoggedFrame {
+  int index = 0;
+  double stamp_s = 0;
+  std::string rgb_file;  // the dataset's file of this frame (rgb.txt), set by MatchToSequence
+  bool localized = false;
+  std::vector<LoggedInstance> instances;
+};
+
+// frames.jsonl as slam_runner.cpp's WriteFrameLog writes it; a localized frame is one
+// whose status is not "lost" (slam::FrameResult::localized()).
+std::vector<LoggedFrame> ReadFrameLog(const fs::path& path) {
+  std::ifstream in(path);
+  if (!in) throw FileError(path, "eval: missing frame log; is this an output folder of segslam run?");
+  std::vector<LoggedFrame> frames;
+  int line_number = 0;
+  for (std::string line; std::getline(in, line);) {
+    ++line_number;
+    if (line.empty()) continue;
+    const std::string where = "eval: " + path.string() + ":" + std::to_string(line_number) + ": ";
+    try {
+      const nlohmann::json json = nlohmann::json::parse(line);
+      LoggedFrame frame;
+      frame.index = json.at("frame").get<int>();
+      frame.stamp_s = json.at("stamp").get<double>();
+      const std::string status = json.at("status").get<std::string>();
+      frame.localized = status != "lost";
+      for (const nlohmann::json& instance : json.at("instances")) {
+        frame.instances.push_back({instance.at("id").get<int>(), instance.at("judged").get<bool>(),
+                                   instance.at("moving").get<bool>()});
+      }
+      frames.push_back(std::move(frame));
+    } catch (const nlohmann::json::exception& e) {
+      throw Error(where + e.what());
+    }
+  }
+  if (frames.empty()) throw FileError(path, "eval: frame log is empty");
+  return frames;
+}
+
+// A value of trajectory.txt's header: "# segslam run, mode mutual, sequence ..." gives
+// ("mode ", ",") -> "mutual"; "# instance masks: gt" gives ("instance masks: ", "") -> "gt".
+std::string HeaderValue(const fs::path& trajectory_file, const std::string& marker, const std::string& end_marker) {
+  std::ifstream in(trajectory_file);
+  for (std::string line; std::getline(in, line) && line.rfind('#', 0) == 0;) {
+    const auto start = line.find(marker);
+    if (start == std::string::npos) continue;
+    const auto value_start = start + marker.size();
+    const auto end = end_marker.empty() ? std::string::npos : line.find(end_marker, value_start);
+    return line.substr(value_start, end == std::string::npos ? std::string::npos : end - value_start);
+  }
+  return "";
+}
+
+double NumberOrNaN(const nlohmann::json& json, const char* key) {
+  const auto found = json.find(key);
+  if (found == json.end() || !found->is_number()) return kNaN;
+  return found->get<double>();
+}
+
+MaskScores MaskScoresFromJson(const nlohmann::json& json) {
+  return {NumberOrNaN(json, "mAP"), NumberOrNaN(json, "AP50"), NumberOrNaN(json, "mIoU")};
+}
+
+ErrorStatistics Scaled(ErrorStatistics s, double factor) {
+  s.rmse *= factor;
+  s.mean *= factor;
+  s.median *= factor;
+  s.std *= factor;
+  s.min *= factor;
+  s.max *= factor;
+  return s;
+}
+
+nlohmann::json StatisticsJson(const std::optional<ErrorStatistics>& s) {
+  if (!s.has_value()) return nullptr;
+  return {{"count", s->count}, {"rmse", s->rmse}, {"mean", s->mean}, {"median", s->median},
+          {"std", s->std},     {"min", s->min},   {"max", s->max}};
+}
+
+nlohmann::json NumberJson(double value) { return std::isnan(value) ? nlohmann::json(nullptr) : nlohmann::json(value); }
+
+// Every frame the run logged must be a frame of the dataset's sequence; each gets its
+// rgb file (whose stem names its masks).
+void MatchToSequence(const fs::path& frame_log, std::vector<LoggedFrame>& frames, const fs::path& sequence_dir) {
+  const std::vector<std::pair<double, std::string>> rgb = ReadTumFileList(sequence_dir / "rgb.txt");
+  for (LoggedFrame& frame : frames) {
+    const auto above = std::lower_bound(rgb.begin(), rgb.end(), frame.stamp_s - kStampToleranceS,
+                                        [](const auto& entry, double stamp) { return entry.first < stamp; });
+    if (above == rgb.end() || std::abs(above->first - frame.stamp_s) > kStampToleranceS) {
+      throw Error(fmt::format("eval: {}: frame {} (stamp {:.6f}) is not a frame of {}: the run is of another sequence",
+                              frame_log.string(), frame.index, frame.stamp_s, sequence_dir.string()));
+    }
+    frame.rgb_file = above->second;
+  }
+}
+
+// The ground-truth instance that each instance of `run_ids` (CV_16U) covers most, by
+// pixels of `gt_ids` (CV_16U, same size) inside its region; 0 = background.
+std::map<int, int> DominantGroundTruthIds(const cv::Mat& run_ids, const cv::Mat& gt_ids) {
+  std::map<int, std::map<int, int>> overlap;  // run id -> gt id -> pixels
+  for (int y = 0; y < run_ids.rows; ++y) {
+    const auto* run_row = run_ids.ptr<std::uint16_t>(y);
+    const auto* gt_row = gt_ids.ptr<std::uint16_t>(y);
+    for (int x = 0; x < run_ids.cols; ++x) {
+      if (run_row[x] != 0) ++overlap[run_row[x]][gt_row[x]];
+    }
+  }
+  std::map<int, int> dominant;
+  for (const auto& [run_id, counts] : overlap) {
+    dominant[run_id] = std::max_element(counts.begin(), counts.end(), [](const auto& a, const auto& b) {
+                         return a.second < b.second;
+                       })->first;
+  }
+  return dominant;
+}
+
+// MovingDetectionScores (see the header for how instances relate to the ground truth).
+void ScoreMovingDetection(const std::vector<LoggedFrame>& frames, const fs::path& run_dir, const fs::path& sequence_dir,
+                          PassEvaluation* pass) {
+  const fs::path tracks_file = sequence_dir / "tracks.json";
+  if (!fs::exists(tracks_file)) {
+    pass->moving_missing_reason = "no tracks.json in " + sequence_dir.string();
+    return;
+  }
+  const fs::path refined_dir = run_dir / "refined_masks";
+  const bool by_overlap = fs::is_directory(refined_dir);
+  const bool same_ids = !by_overlap && (pass->masks == "gt" || pass->masks == "none" || pass->masks.empty());
+  if (!by_overlap && !same_ids) {
+    pass->moving_missing_reason = "instance ids of '" + pass->masks + "' carry no ground-truth identity and the run "
+                                  "saved no masks to relate them";
+    return;
+  }
+  std::map<std::pair<int, int>, bool> truly_moving;  // (instance id, frame) -> moving
+  for (const ObjectTrack& track : ReadTracks(tracks_file)) {
+    for (const TrackSample& sample : track.samples) truly_moving[{track.instance_id, sample.frame}] = sample.moving;
+  }
+  MovingDetectionScores scores;
+  for (const LoggedFrame& frame : frames) {
+    const bool any_judged = std::any_of(frame.instances.begin(), frame.instances.end(),
+                                        [](const LoggedInstance& instance) { return instance.judged; });
+    if (!any_judged) continue;
+    std::map<int, int> gt_id_of;
+    if (by_overlap) {
+      const std::string stem = fs::path(frame.rgb_file).stem().string();
+      const fs::path run_mask = refined_dir / (stem + ".png");
+      const fs::path gt_mask = sequence_dir / "masks" / (stem + ".png");
+      const cv::Mat run_ids = ReadInstanceMask(run_mask);
+      const cv::Mat gt_ids = ReadInstanceMask(gt_mask);
+      if (run_ids.size() != gt_ids.size()) throw FileError(run_mask, "eval: size differs from " + gt_mask.string());
+      gt_id_of = DominantGroundTruthIds(run_ids, gt_ids);
+    }
+    for (const LoggedInstance& instance : frame.instances) {
+      if (!instance.judged) continue;
+      int gt_id = instance.id;
+      if (by_overlap) {
+        const auto found = gt_id_of.find(instance.id);
+        gt_id = found == gt_id_of.end() ? 0 : found->second;
+      }
+      const auto found = truly_moving.find({gt_id, frame.index});
+      const bool moving = found != truly_moving.end() && found->second;
+      if (instance.moving) {
+        ++(moving ? scores.true_positives : scores.false_positives);
+      } else {
+        ++(moving ? scores.false_negatives : scores.true_negatives);
+      }
+    }
+  }
+  pass->moving = scores;
+}
+
+PassEvaluation EvaluatePass(const std::string& name, const fs::path& run_dir, const fs::path& sequence_dir,
+                            const std::optional<Eigen::Isometry3d>& fixed_alignment) {
+  PassEvaluation pass;
+  pass.name = name;
+  pass.run_dir = run_dir;
+  pass.sequence_dir = sequence_dir;
+
+  const fs::path ground_truth_file = sequence_dir / "groundtruth.txt";
+  if (!fs::exists(ground_truth_file)) {
+    throw Error("eval: " + ground_truth_file.string() +
+                ": no ground truth (groundtruth.txt missing); eval needs a dataset with ground-truth poses");
+  }
+  const fs::path trajectory_file = run_dir / "trajectory.txt";
+  if (!fs::exists(trajectory_file)) {
+    throw Error("eval: " + trajectory_file.string() + ": no trajectory; is " + run_dir.string() +
+                " an output folder of segslam run?");
+  }
+  const fs::path frame_log = run_dir / "frames.jsonl";
+  std::vector<LoggedFrame> frames = ReadFrameLog(frame_log);
+  MatchToSequence(frame_log, frames, sequence_dir);
+  pass.mode = HeaderValue(trajectory_file, ", mode ", ",");
+  pass.masks = HeaderValue(trajectory_file, "instance masks: ", "");
+  pass.frames = static_cast<int>(frames.size());
+  pass.localized_frames =
+      static_cast<int>(std::count_if(frames.begin(), frames.end(), [](const LoggedFrame& f) { return f.localized; }));
+
+  const std::vector<StampedPose> ground_truth = ReadTumTrajectory(ground_truth_file);
+  const std::vector<StampedPose> estimate = ReadTumTrajectory(trajectory_file);
+
+  // ATE: Horn-aligned, or in pass 1's aligned frame (see the header).
+  pass.ate_aligned = !fixed_alignment.has_value();
+  const std::size_t needed = pass.ate_aligned ? 3 : 1;
+  if (estimate.size() < needed) {
+    pass.ate_missing_reason = fmt::format("{} pose(s) estimated, ATE needs {}", estimate.size(), needed);
+  } else {
+    AteOptions ate_options;
+    std::vector<StampedPose> moved = estimate;
+    if (fixed_alignment.has_value()) {
+      ate_options.align = false;
+      for (StampedPose& pose : moved) pose.T_wc = *fixed_alignment * pose.T_wc;
+    }
+    try {
+      const AteResult ate = ComputeAte(ground_truth, moved, ate_options);
+      pass.ate_m = ate.translation_m;
+      pass.T_gt_est = fixed_alignment.has_value() ? *fixed_alignment : ate.T_gt_est;
+    } catch (const Error& e) {
+      pass.ate_missing_reason = e.what();
+    }
+  }
+
+  // RPE over 1 s, as evaluate_rpe.py --fixed_delta --delta 1 --delta_unit s.
+  if (estimate.size() < 2) {
+    pass.rpe_missing_reason = fmt::format("{} pose(s) estimated", estimate.size());
+  } else {
+    try {
+      const RpeResult rpe = ComputeRpe(ground_truth, estimate, RpeOptions{});
+      pass.rpe_translation_m = rpe.translation_m;
+      pass.rpe_rotation_deg = Scaled(rpe.rotation_rad, kDegreesPerRadian);
+    } catch (const Error& e) {
+      pass.rpe_missing_reason = e.what();
+    }
+  }
+
+  // Raw vs refined masks, where the mutual loop scored them.
+  const fs::path seg_file = run_dir / "seg.json";
+  if (fs::exists(seg_file)) {
+    std::ifstream in(seg_file);
+    nlohmann::json seg;
+    try {
+      seg = nlohmann::json::parse(in);
+      pass.seg_raw = MaskScoresFromJson(seg.at("raw"));
+      pass.seg_refined = MaskScoresFromJson(seg.at("refined"));
+      pass.segmenter = seg.value("segmenter", "");
+    } catch (const nlohmann::json::exception& e) {
+      throw FileError(seg_file, std::string("eval: malformed: ") + e.what());
+    }
+  }
+
+  // Moving-object detection over judged instances (MovingDetectionScores).
+  ScoreMovingDetection(frames, run_dir, sequence_dir, &pass);
+  return pass;
+}
+
+std::string Fixed(const std::optional<ErrorStatistics>& s, double ErrorStatistics::*field, int decimals) {
+  if (!s.has_value()) return "n/a";
+  return fmt::format("{:.{}f}", (*s).*field, decimals);
+}
+
+std::string Percent(double value) { return std::isnan(value) ? "n/a" : fmt::format("{:.1f}", 100 * value); }
+
+}  // namespace
+
+double MovingDetectionScores::Precision() const {
+  const int predicted = true_positives + false_positives;
+  return predicted > 0 ? double(true_positives) / predicted : kNaN;
+}
+
+double MovingDetectionScores::Recall() const {
+  const int actual = true_positives + false_negatives;
+  return actual > 0 ? double(true_positives) / actual : kNaN;
+}
+
+nlohmann::json PassEvaluation::ToJson() const {
+  nlohmann::json T_gt_est_json = nlohmann::json::array();
+  for (int row = 0; row < 4; ++row) {
+    nlohmann::json values = nlohmann::json::array();
+    for (int col = 0; col < 4; ++col) values.push_back(T_gt_est.matrix()(row, col));
+    T_gt_est_json.push_back(values);
+  }
+  nlohmann::json json = {
+      {"name", name},
+      {"run_dir", run_dir.string()},
+      {"sequence", sequence_dir.string()},
+      {"mode", mode},
+      {"masks", masks},
+      {"frames", frames},
+      {"localized_frames", localized_frames},
+      {"localized_share", LocalizedShare()},
+      {"ate", {{"aligned", ate_aligned}, {"T_gt_est", T_gt_est_json}, {"translation_m", StatisticsJson(ate_m)}}},
+      {"rpe",
+       {{"delta", 1}, {"delta_unit", "s"}, {"translation_m", StatisticsJson(rpe_translation_m)},
+        {"rotation_deg", StatisticsJson(rpe_rotation_deg)}}},
+      {"segmentation", nullptr},
+      {"moving_detection", nullptr},
+      {"metrics", nlohmann::json::object()}};
+  if (!ate_m.has_value()) json["ate"]["missing"] = ate_missing_reason;
+  if (!rpe_translation_m.has_value()) json["rpe"]["missing"] = rpe_missing_reason;
+  if (seg_raw.has_value() && seg_refined.has_value()) {
+    json["segmentation"] = {
+        {"segmenter", segmenter},
+        {"raw", {{"mAP", NumberJson(seg_raw->mAP)}, {"AP50", NumberJson(seg_raw->AP50)}, {"mIoU", NumberJson(seg_raw->mIoU)}}},
+        {"refined",
+         {{"mAP", NumberJson(seg_refined->mAP)}, {"AP50", NumberJson(seg_refined->AP50)},
+          {"mIoU", NumberJson(seg_refined->mIoU)}}}};
+  }
+  if (!moving.has_value()) json["moving_detection"] = {{"missing", moving_missing_reason}};
+  if (moving.has_value()) {
+    json["moving_detection"] = {{"judged", moving->Judged()},
+                                {"true_positives", moving->true_positives},
+                                {"false_positives", moving->false_positives},
+                                {"false_negatives", moving->false_negatives},
+                                {"true_negatives", moving->true_negatives},
+                                {"precision", NumberJson(moving->Precision())},
+                                {"recall", NumberJson(moving->Recall())}};
+  }
+  for (const auto& [metric, value] : PassMetrics(*this)) json["metrics"][metric] = NumberJson(value);
+  return json;
+}
+
+nlohmann::json RunEvaluation::ToJson() const {
+  nlohmann::json json = {{"run_dir", run_dir.string()}, {"dataset", dataset.string()}, {"passes", nlohmann::json::array()}};
+  for (const PassEvaluation& pass : passes) json["passes"].push_back(pass.ToJson());
+  return json;
+}
+
+std::string RunEvaluation::Table() const {
+  std::string text;
+  text += fmt::format("{:<8} {:>6} {:>9} | {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:<9} | {:>9} {:>9}\n", "sequence",
+                      "frames", "localized", "rmse", "mean", "median", "std", "min", "max", "", "trans m", "rot deg");
+  text += fmt::format("{:<8} {:>6} {:>9} | {:^64} | {:^19}\n", "", "", "%", "ATE [m]", "RPE rmse per s");
+  for (const PassEvaluation& p : passes) {
+    text += fmt::format("{:<8} {:>6} {:>9} | {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:<9} | {:>9} {:>9}\n", p.name,
+                        p.frames, Percent(p.LocalizedShare()), Fixed(p.ate_m, &ErrorStatistics::rmse, 4),
+                        Fixed(p.ate_m, &ErrorStatistics::mean, 4), Fixed(p.ate_m, &ErrorStatistics::median, 4),
+                        Fixed(p.ate_m, &ErrorStatistics::std, 4), Fixed(p.ate_m, &ErrorStatistics::min, 4),
+                        Fixed(p.ate_m, &ErrorStatistics::max, 4), p.ate_m ? (p.ate_aligned ? "aligned" : "map frame") : "",
+                        Fixed(p.rpe_translation_m, &ErrorStatistics::rmse, 4),
+                        Fixed(p.rpe_rotation_deg, &ErrorStatistics::rmse, 3));
+  }
+  for (const PassEvaluation& p : passes) {
+    if (!p.ate_m.has_value()) text += fmt::format("{}: no ATE: {}\n", p.name, p.ate_missing_reason);
+    if (!p.rpe_translation_m.has_value()) text += fmt::format("{}: no RPE: {}\n", p.name, p.rpe_missing_reason);
+  }
+
+  const bool any_seg = std::any_of(passes.begin(), passes.end(), [](const auto& p) { return p.seg_raw.has_value(); });
+  if (any_seg) {
+    text += fmt::format("\nSegmentation in the loop (percent)\n{:<8} | {:>6} {:>6} {:>6} | {:>6} {:>6} {:>6}\n",
+                        "sequence", "mAP", "AP50", "mIoU", "mAP", "AP50", "mIoU");
+    text += fmt::format("{:<8} | {:^20} | {:^20}\n", "", "raw", "refined");
+    for (const PassEvaluation& p : passes) {
+      if (!p.seg_raw.has_value()) continue;
+      text += fmt::format("{:<8} | {:>6} {:>6} {:>6} | {:>6} {:>6} {:>6}\n", p.name, Percent(p.seg_raw->mAP),
+                          Percent(p.seg_raw->AP50), Percent(p.seg_raw->mIoU), Percent(p.seg_refined->mAP),
+                          Percent(p.seg_refined->AP50), Percent(p.seg_refined->mIoU));
+    }
+  }
+
+  for (const PassEvaluation& p : passes) {
+    if (!p.moving.has_value()) text += fmt::format("{}: no moving-object scores: {}\n", p.name, p.moving_missing_reason);
+  }
+  const bool any_moving = std::any_of(passes.begin(), passes.end(), [](const auto& p) { return p.moving.has_value(); });
+  if (any_moving) {
+    text += fmt::format("\nMoving-object detection over judged instances vs tracks.json\n{:<8} {:>7} {:>9} {:>7} "
+                        "{:>5} {:>5} {:>5} {:>5}\n",
+                        "sequence", "judged", "precision", "recall", "tp", "fp", "fn", "tn");
+    for (const PassEvaluation& p : passes) {
+      if (!p.moving.has_value()) continue;
+      const MovingDetectionScores& m = *p.moving;
+      text += fmt::format("{:<8} {:>7} {:>9} {:>7} {:>5} {:>5} {:>5} {:>5}\n", p.name, m.Judged(),
+                          Percent(m.Precision()), Percent(m.Recall()), m.true_positives, m.false_positives,
+                          m.false_negatives, m.true_negatives);
+    }
+  }
+  return text;
+}
+
+RunEvaluation EvaluateRun(const fs::path& run_dir, const fs::path& dataset) {
+  if (!fs::is_directory(run_dir)) throw Error("eval: " + run_dir.string() + ": no such run folder");
+  if (!fs::is_directory(dataset)) throw Error("eval: " + dataset.string() + ": no such dataset folder");
+  RunEvaluation evaluation;
+  evaluation.run_dir = run_dir;
+  evaluation.dataset = dataset;
+  const bool run_two_pass = fs::is_directory(run_dir / "pass1") || fs::is_directory(run_dir / "pass2");
+  const bool dataset_two_pass = IsTwoPassDataset(dataset);
+  if (run_two_pass != dataset_two_pass) {
+    throw Error("eval: " + run_dir.string() + (run_two_pass ? " holds pass1/pass2 outputs but " : " is a single-sequence run but ") +
+                dataset.string() + (dataset_two_pass ? " has two passes" : " is a single sequence") +
+                ": run and dataset do not match");
+  }
+  if (dataset_two_pass) {
+    evaluation.passes.push_back(EvaluatePass("pass1", run_dir / "pass1", dataset / "pass1", std::nullopt));
+    std::optional<Eigen::Isometry3d> alignment;
+    if (evaluation.passes[0].ate_m.has_value()) alignment = evaluation.passes[0].T_gt_est;
+    evaluation.passes.push_back(EvaluatePass("pass2", run_dir / "pass2", dataset / "pass2", alignment));
+  } else {
+    evaluation.passes.push_back(EvaluatePass(dataset.filename().string(), run_dir, dataset, std::nullopt));
+  }
+  return evaluation;
+}
+
+const std::vector<std::string>& PassMetricNames() {
+  static const std::vector<std::string> names = {
+      "ate_rmse_m",       "ate_mean_m",      "ate_median_m",     "ate_std_m",        "ate_min_m",
+      "ate_max_m",        "rpe_trans_rmse_m", "rpe_rot_rmse_deg", "localized_share",  "seg_raw_map",
+      "seg_raw_ap50",     "seg_raw_miou",    "seg_refined_map",  "seg_refined_ap50", "seg_refined_miou",
+      "moving_precision", "moving_recall"};
+  return names;
+}
+
+std::map<std::string, double> PassMetrics(const PassEvaluation& pass) {
+  std::map<std::string, double> metrics;
+  for (const std::string& name : PassMetricNames()) metrics[name] = kNaN;
+  if (pass.ate_m.has_value()) {
+    metrics["ate_rmse_m"] = pass.ate_m->rmse;
+    metrics["ate_mean_m"] = pass.ate_m->mean;
+    metrics["ate_median_m"] = pass.ate_m->median;
+    metrics["ate_std_m"] = pass.ate_m->std;
+    metrics["ate_min_m"] = pass.ate_m->min;
+    metrics["ate_max_m"] = pass.ate_m->max;
+  }
+  if (pass.rpe_translation_m.has_value()) metrics["rpe_trans_rmse_m"] = pass.rpe_translation_m->rmse;
+  if (pass.rpe_rotation_deg.has_value()) metrics["rpe_rot_rmse_deg"] = pass.rpe_rotation_deg->rmse;
+  metrics["localized_share"] = pass.LocalizedShare();
+  if (pass.seg_raw.has_value()) {
+    metrics["seg_raw_map"] = pass.seg_raw->mAP;
+    metrics["seg_raw_ap50"] = pass.seg_raw->AP50;
+    metrics["seg_raw_miou"] = pass.seg_raw->mIoU;
+  }
+  if (pass.seg_refined.has_value()) {
+    metrics["seg_refined_map"] = pass.seg_refined->mAP;
+    metrics["seg_refined_ap50"] = pass.seg_refined->AP50;
+    metrics["seg_refined_miou"] = pass.seg_refined->mIoU;
+  }
+  if (pass.moving.has_value()) {
+    metrics["moving_precision"] = pass.moving->Precision();
+    metrics["moving_recall"] = pass.moving->Recall();
+  }
+  return metrics;
+}
+
+}  // namespace segslam::harness

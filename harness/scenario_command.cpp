@@ -1,0 +1,278 @@
+// `segslam scenario run SCENARIO.yaml`: the CI entry point. Generates the scenario's
+// dataset once (cached by a hash of the effective scenario, the frame limit and the code
+// version), runs each mode `repeats` times (repeats differ by the simulated segmenter's
+// seed; SLAM itself is deterministic, so a mode without a segmenter runs once), scores
+// each run (harness/run_evaluation.h), checks the scenario's `expect:` thresholds on the
+// medians over repeats (harness/scenario_report.h names the metrics) and writes the
+// report directory:
+//   results.json  every run's metrics, the medians/min/max, the checks, the scenario,
+//                 seeds, code version and machine
+//   report.md, report.html  the tables in the layout of the paper's
+//   scenario.yaml           the effective scenario (every key, overrides applied)
+//   figures/                top views of both passes (the paper's Fig. 4)
+//   runs/<mode>/<seed>/     each run's outputs, as `segslam run` writes them
+// Exit code: 0 when every expectation passes, 2 when one fails, 1 on an error.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+#include <yaml-cpp/yaml.h>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "harness/commands.h"
+#include "harness/dataset_run.h"
+#include "harness/interrupt.h"
+#include "harness/progress_bar.h"
+#include "harness/run_evaluation.h"
+#include "harness/scenario_report.h"
+#include "scenes/scenario.h"
+#include "sim/dataset_generator.h"
+
+namespace segslam::harness {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kExitExpectationFailed = 2;
+
+struct ScenarioRunArgs {
+  std::string scenario_file;
+  std::string out_dir;
+  std::string cache_dir = "data/cache";
+  std::string modes;      // comma-separated; empty = the scenario's bench.modes
+  int repeats = 0;        // 0 = the scenario's bench.repeats
+  std::string segmenter;  // empty = the scenario's bench.segmenter
+  int frames = 0;
+  std::string junit_file;
+  std::string gl = "osmesa";
+  std::vector<std::string> overrides;
+  bool quiet = false;
+};
+
+// "city.moving_cars=8" -> ("city.moving_cars", "8")
+std::pair<std::string, std::string> SplitOverride(const std::string& text) {
+  const auto equals = text.find('=');
+  if (equals == std::string::npos || equals == 0) {
+    throw Error("--set " + text + ": expected KEY=VALUE, e.g. city.moving_cars=8");
+  }
+  return {text.substr(0, equals), text.substr(equals + 1)};
+}
+
+// FNV-1a, 64 bit: stable across builds and machines, unlike std::hash.
+std::uint64_t Fnv1a64(const std::string& bytes) {
+  std::uint64_t hash = 14695981039346656037ull;
+  for (const unsigned char c : bytes) {
+    hash ^= c;
+    hash *= 1099511628211ull;
+  }
+  return hash;
+}
+
+// The dataset depends on the world description (not on `expect:` or `bench:`), the frame
+// limit and the generator's code.
+std::string DatasetCacheKey(const scenes::Scenario& scenario, int frames) {
+  scenes::Scenario world = scenario;
+  world.expect = YAML::Node();
+  world.bench = YAML::Node();
+  YAML::Emitter yaml;
+  yaml << scenes::ScenarioToYaml(world);
+  const std::string key_text = fmt::format("{}\nframes={}\ncode={}\n", yaml.c_str(), frames, SEGSLAM_VERSION);
+  return fmt::format("{:016x}", Fnv1a64(key_text)).substr(0, 12);
+}
+
+std::string EffectiveYaml(const scenes::Scenario& scenario) {
+  YAML::Emitter yaml;
+  yaml << scenes::ScenarioToYaml(scenario);
+  return yaml.c_str();
+}
+
+std::string Metres(const std::optional<ErrorStatistics>& ate) {
+  return ate.has_value() ? fmt::format("{:.4f} m", ate->rmse) : "n/a";
+}
+
+int RunScenario(const ScenarioRunArgs& args) {
+  const auto start = std::chrono::steady_clock::now();
+  // Everything that can be refused is checked before any work starts.
+  scenes::Scenario scenario = scenes::LoadScenario(args.scenario_file);
+  for (const auto& text : args.overrides) {
+    const auto [key, value] = SplitOverride(text);
+    scenes::ApplyOverride(scenario, key, value);
+  }
+  BenchSettings bench = BenchSettings::FromYaml(scenario.bench, args.scenario_file);
+  if (!args.modes.empty()) {
+    bench.modes.clear();
+    std::string rest = args.modes;
+    for (std::size_t comma; (comma = rest.find(',')) != std::string::npos; rest = rest.substr(comma + 1)) {
+      bench.modes.push_back(rest.substr(0, comma));
+    }
+    bench.modes.push_back(rest);
+  }
+  if (args.repeats > 0) bench.repeats = args.repeats;
+  if (!args.segmenter.empty()) bench.segmenter = args.segmenter;
+  if (const std::string problem = bench.Check(); !problem.empty()) throw Error("scenario run: " + problem);
+  const std::vector<Expectation> expectations = ParseExpectations(scenario.expect, bench.modes, args.scenario_file);
+  sim::GenerateOptions generate_options;
+  generate_options.backend = sim::ParseGlBackend(args.gl);
+  generate_options.max_frames_per_pass = args.frames;
+  const std::atomic<bool>* cancel = InstallInterruptFlag();
+  generate_options.cancel = cancel;
+
+  const fs::path report_dir = args.out_dir.empty() ? fs::path("reports") / scenario.name : fs::path(args.out_dir);
+  const fs::path dataset = fs::path(args.cache_dir) / (scenario.name + "-" + DatasetCacheKey(scenario, args.frames));
+  fmt::print("segslam scenario run: {} ({}), modes {}, {} repeat(s), segmenter {}\n", scenario.name,
+             args.scenario_file, fmt::format("{}", fmt::join(bench.modes, ", ")), bench.repeats, bench.segmenter);
+
+  // The dataset, generated once per effective scenario and code version. The generator
+  // writes into a staging folder and renames it, so an existing folder is complete.
+  std::fflush(stdout);
+  ScenarioReport report;
+  report.dataset_from_cache = IsTwoPassDataset(dataset);
+  if (report.dataset_from_cache) {
+    fmt::print("dataset {} (cached)\n", dataset.string());
+    std::fflush(stdout);
+  } else {
+    fs::create_directories(dataset.parent_path());
+    generate_options.overwrite = true;  // a folder there that is not a dataset is replaced
+    ProgressBar bar("generate " + scenario.name);
+    const sim::GenerateSummary summary =
+        sim::GenerateDataset(scenario, dataset, generate_options, [&](const sim::GenerationProgress& p) {
+          if (!args.quiet) bar.Update(p.frames_done, p.frames_total, p.frames_per_second, fmt::format("pass{}", p.pass_index + 1));
+        });
+    if (!args.quiet) bar.Finish();
+    fmt::print("dataset {}: generated {} frames in {:.1f} s\n", dataset.string(), summary.frames, summary.seconds);
+  }
+
+  // An earlier report in the same place goes first, so a run that stops half-way leaves
+  // no results.json that looks complete.
+  for (const char* stale : {"results.json", "report.md", "report.html", "scenario.yaml"}) fs::remove(report_dir / stale);
+  if (!args.junit_file.empty()) fs::remove(args.junit_file);
+  fs::remove_all(report_dir / "runs");
+  fs::remove_all(report_dir / "figures");
+  fs::create_directories(report_dir / "runs");
+  int total_runs = 0;
+  for (const std::string& mode : bench.modes) total_runs += bench.ModeIsDeterministic(mode) ? 1 : bench.repeats;
+  int done_runs = 0;
+  for (const std::string& mode : bench.modes) {
+    const bool deterministic = bench.ModeIsDeterministic(mode);
+    if (deterministic && bench.repeats > 1) {
+      fmt::print("{}: deterministic ({}), so one run stands for all {} repeats\n", mode,
+                 mode == "plain" ? "no segmenter" : "ground-truth masks", bench.repeats);
+    }
+    const int repeats = deterministic ? 1 : bench.repeats;
+    for (int repeat = 0; repeat < repeats; ++repeat) {
+      RepeatRun run;
+      run.mode = mode;
+      run.repeat = repeat;
+      run.seed = bench.seed + static_cast<std::uint64_t>(repeat);
+      run.run_dir = (fs::path("runs") / mode / (deterministic ? std::string("once") : fmt::format("seed{}", run.seed))).string();
+      DatasetRunOptions options;
+      options.mode = mode;
+      if (mode != "plain" && bench.segmenter != "gt") options.segmenter = bench.segmenter;
+      options.seed = run.seed;
+      std::optional<ProgressBar> bar;
+      std::string bar_pass;
+      // Each pass's rate counts from the end of the previous pass (or the run's start).
+      auto pass_start = std::chrono::steady_clock::now();
+      options.on_frame = [&](const std::string& pass, int done, int total) {
+        if (cancel->load()) throw Error("scenario run: cancelled");
+        if (args.quiet) return;
+        if (!bar.has_value() || bar_pass != pass) {
+          if (bar.has_value()) bar->Finish();
+          bar.emplace(fmt::format("[{}/{}] {} {}", done_runs + 1, total_runs, mode, pass));
+          bar_pass = pass;
+        }
+        const auto now = std::chrono::steady_clock::now();
+        bar->Update(done, total, done / std::max(std::chrono::duration<double>(now - pass_start).count(), 1e-9));
+        if (done == total) pass_start = now;
+      };
+      const auto run_start = std::chrono::steady_clock::now();
+      RunDataset(dataset, report_dir / run.run_dir, options);
+      if (bar.has_value()) bar->Finish();
+      run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - run_start).count();
+      run.evaluation = EvaluateRun(report_dir / run.run_dir, dataset);
+      ++done_runs;
+      std::string line = fmt::format("[{}/{}] {:<13} {:<7}", done_runs, total_runs, mode,
+                                     deterministic ? "" : fmt::format("seed {}", run.seed));
+      for (const PassEvaluation& pass : run.evaluation.passes) {
+        line += fmt::format("  {} ATE {} localized {:.0f}%", pass.name, Metres(pass.ate_m), 100 * pass.LocalizedShare());
+      }
+      fmt::print("{}  ({:.1f} s)\n", line, run.seconds);
+      std::fflush(stdout);  // a CI log shows each run as it ends
+      report.runs.push_back(std::move(run));
+    }
+  }
+
+  report.scenario_name = scenario.name;
+  report.scenario_file = args.scenario_file;
+  report.effective_scenario_yaml = EffectiveYaml(scenario);
+  report.overrides = args.overrides;
+  report.code_version = SEGSLAM_VERSION;
+  report.dataset_dir = dataset.string();
+  report.frames_per_pass = args.frames;
+  report.bench = bench;
+  report.spreads = Summarize(report.runs);
+  report.checks = CheckExpectations(expectations, report.spreads);
+  report.report_dir = report_dir;
+  // Figures before the documents, which show each figure that exists.
+  for (const std::string& problem : DrawReportFigures(report)) fmt::print("figure not drawn: {}\n", problem);
+  report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  WriteFileAtomically(report_dir / "scenario.yaml", report.effective_scenario_yaml + "\n");
+  WriteFileAtomically(report_dir / "results.json", report.ToJson().dump(2) + "\n");
+  WriteFileAtomically(report_dir / "report.md", report.ToMarkdown());
+  WriteFileAtomically(report_dir / "report.html", report.ToHtml());
+  if (!args.junit_file.empty()) WriteFileAtomically(args.junit_file, report.ToJUnitXml());
+
+  int failed = 0;
+  if (!report.checks.empty()) fmt::print("\nexpectations (medians over repeats):\n");
+  for (const ExpectationResult& check : report.checks) {
+    fmt::print("  {}  {:<40} {:>12} {}\n", check.passed ? "PASS" : "FAIL", check.expectation.name.text,
+               std::isnan(check.value) ? std::string("n/a") : fmt::format("{:.6g}", check.value),
+               check.expectation.Bounds());
+    if (!check.passed) ++failed;
+  }
+  fmt::print("scenario {}: {} of {} expectations passed, {} runs in {:.1f} s, report in {}\n", scenario.name,
+             report.checks.size() - failed, report.checks.size(), report.runs.size(), report.seconds,
+             report_dir.string());
+  return failed == 0 ? 0 : kExitExpectationFailed;
+}
+
+}  // namespace
+
+void AddScenarioCommand(CLI::App& app, std::function<int()>* action) {
+  CLI::App* scenario = app.add_subcommand("scenario", "Scenario files as tests: generate, run every mode, check thresholds");
+  scenario->require_subcommand(1);
+  auto args = std::make_shared<ScenarioRunArgs>();
+  CLI::App* run = scenario->add_subcommand(
+      "run",
+      "Generate the scenario's dataset (cached), run each mode repeatedly, score the runs, check the scenario's "
+      "expect: thresholds on the medians and write results.json, report.md and report.html. Exit code 0: all "
+      "thresholds pass; 2: one fails; 1: an error");
+  run->add_option("scenario", args->scenario_file, "Scenario YAML file (with optional expect: and bench: sections)")
+      ->required();
+  run->add_option("--out,-o", args->out_dir, "Report directory (default reports/<scenario name>)");
+  run->add_option("--repeats", args->repeats, "Runs per mode, seeds bench.seed.. (default: bench.repeats, else 10)")
+      ->check(CLI::PositiveNumber);
+  run->add_option("--modes", args->modes, "Comma-separated modes (default: bench.modes, else plain,mask-moveable,mutual)");
+  run->add_option("--segmenter", args->segmenter,
+                  "Simulated segmenter preset for mask-moveable and mutual, or gt (default: bench.segmenter, else "
+                  "fcis-like)");
+  run->add_option("--frames", args->frames, "Generate and run only the first N frames per pass (0 = all)")
+      ->check(CLI::NonNegativeNumber);
+  run->add_option("--junit", args->junit_file, "Also write JUnit XML, one testcase per expectation");
+  run->add_option("--cache", args->cache_dir, "Folder of cached datasets (<name>-<hash> inside)")->capture_default_str();
+  run->add_option("--set", args->overrides, "Override a scenario key, e.g. --set city.moving_cars=8 (repeatable)");
+  run->add_option("--gl", args->gl, "Off-screen GL back-end for generation: osmesa or egl")->capture_default_str();
+  run->add_flag("-q,--quiet", args->quiet, "No progress bars");
+  run->callback([args, action] { *action = [args] { return RunScenario(*args); }; });
+}
+
+}  // namespace segslam::harness

@@ -1,0 +1,567 @@
+#include "harness/scenario_report.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <set>
+#include <thread>
+
+#include <fmt/format.h>
+
+#include "core/error.h"
+#include "core/pose.h"
+#include "harness/report_figures.h"
+#include "seg/simulated_segmenter.h"
+
+namespace segslam::harness {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+const std::vector<std::string> kKnownModes = {"plain", "mask-moveable", "mutual"};
+const std::vector<std::string> kPasses = {"pass1", "pass2"};
+
+bool Contains(const std::vector<std::string>& list, const std::string& value) {
+  return std::find(list.begin(), list.end(), value) != list.end();
+}
+
+std::string Join(const std::vector<std::string>& parts, const std::string& separator) {
+  std::string text;
+  for (std::size_t i = 0; i < parts.size(); ++i) text += (i ? separator : "") + parts[i];
+  return text;
+}
+
+std::vector<std::string> Split(const std::string& text, char separator) {
+  std::vector<std::string> parts;
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t end = text.find(separator, start);
+    parts.push_back(text.substr(start, end == std::string::npos ? std::string::npos : end - start));
+    if (end == std::string::npos) return parts;
+    start = end + 1;
+  }
+}
+
+nlohmann::json NumberJson(double value) { return std::isnan(value) ? nlohmann::json(nullptr) : nlohmann::json(value); }
+
+// A table of the report with its heading and note, added to a ReportDocument.
+struct Table {
+  std::string title;
+  std::string note;
+  std::vector<std::string> header;
+  std::vector<std::vector<std::string>> rows;
+};
+
+// XML needs the same five entities as HTML text.
+std::string EscapeXml(const std::string& text) { return EscapeHtml(text); }
+
+// "0.0123 [0.0101, 0.0150]" (median [min, max]); `scale` turns shares into percent.
+// Runs without a value are named: "0.0123 (2 of 3 runs)".
+std::string SpreadText(const Spread& s, int decimals, double scale = 1) {
+  if (s.count == 0) return "n/a";
+  std::string text = s.count == 1 ? fmt::format("{:.{}f}", s.median * scale, decimals)
+                                  : fmt::format("{:.{}f} [{:.{}f}, {:.{}f}]", s.median * scale, decimals,
+                                                s.min * scale, decimals, s.max * scale, decimals);
+  if (s.count < s.runs) text += fmt::format(" ({} of {} runs)", s.count, s.runs);
+  return text;
+}
+
+const Spread* FindSpread(const SpreadTable& table, const std::string& pass, const std::string& mode,
+                         const std::string& metric) {
+  const auto p = table.find(pass);
+  if (p == table.end()) return nullptr;
+  const auto m = p->second.find(mode);
+  if (m == p->second.end()) return nullptr;
+  const auto v = m->second.find(metric);
+  return v == m->second.end() ? nullptr : &v->second;
+}
+
+std::string Cell(const SpreadTable& table, const std::string& pass, const std::string& mode, const std::string& metric,
+                 int decimals, double scale = 1) {
+  const Spread* s = FindSpread(table, pass, mode, metric);
+  return s == nullptr ? "n/a" : SpreadText(*s, decimals, scale);
+}
+
+std::string ValueText(double value) { return std::isnan(value) ? "n/a" : fmt::format("{:.6g}", value); }
+
+// The report's tables, in the layout of the paper's.
+std::vector<Table> ReportTables(const ScenarioReport& report) {
+  const std::vector<std::string>& modes = report.bench.modes;
+  const std::string spread_note = "median [min, max] over repeats; one number where a mode ran once.";
+  std::vector<Table> tables;
+
+  Table checks{"Expectations", "Medians over repeats (ratios: of medians), against the scenario's expect: section.",
+               {"metric", "threshold", "value", "result"}, {}};
+  for (const ExpectationResult& r : report.checks) {
+    checks.rows.push_back({r.expectation.name.text, r.expectation.Bounds(), ValueText(r.value), r.passed ? "PASS" : "FAIL"});
+  }
+  if (!checks.rows.empty()) tables.push_back(checks);
+
+  Table ate{"ATE rmse [m] per sequence and mode (as the paper's Table I)",
+            spread_note + " Pass 1 aligned to the ground truth (Horn); pass 2 in pass 1's aligned map frame.",
+            {"sequence"}, {}};
+  for (const auto& mode : modes) ate.header.push_back(mode);
+  for (const auto& pass : kPasses) {
+    std::vector<std::string> row = {report.scenario_name + " " + pass};
+    for (const auto& mode : modes) row.push_back(Cell(report.spreads, pass, mode, "ate_rmse_m", 4));
+    ate.rows.push_back(row);
+  }
+  tables.push_back(ate);
+
+  Table rpe{"RPE rmse per second: translation [m] / rotation [deg]",
+            spread_note + " n/a: fewer than 2 pose pairs 1 s apart (results.json: rpe.missing says why).",
+            {"sequence"},
+            {}};
+  for (const auto& mode : modes) rpe.header.push_back(mode);
+  for (const auto& pass : kPasses) {
+    std::vector<std::string> row = {report.scenario_name + " " + pass};
+    for (const auto& mode : modes) {
+      row.push_back(Cell(report.spreads, pass, mode, "rpe_trans_rmse_m", 4) + " / " +
+                    Cell(report.spreads, pass, mode, "rpe_rot_rmse_deg", 3));
+    }
+    rpe.rows.push_back(row);
+  }
+  tables.push_back(rpe);
+
+  Table seg{"Segmentation in the loop, raw vs refined [%] (as the paper's Tables II and IV)",
+            spread_note + " Scored against the ground-truth masks with SLAM's poses; segmenter " + report.bench.segmenter + ".",
+            {"sequence", "mode", "raw mAP", "raw AP50", "raw mIoU", "refined mAP", "refined AP50", "refined mIoU"},
+            {}};
+  for (const auto& pass : kPasses) {
+    for (const auto& mode : modes) {
+      const Spread* raw = FindSpread(report.spreads, pass, mode, "seg_raw_map");
+      if (raw == nullptr || raw->count == 0) continue;
+      std::vector<std::string> row = {report.scenario_name + " " + pass, mode};
+      for (const char* metric : {"seg_raw_map", "seg_raw_ap50", "seg_raw_miou", "seg_refined_map", "seg_refined_ap50",
+                                 "seg_refined_miou"}) {
+        row.push_back(Cell(report.spreads, pass, mode, metric, 1, 100));
+      }
+      seg.rows.push_back(row);
+    }
+  }
+  if (seg.rows.empty()) seg.note = "No run scored masks (the mutual loop with a simulated segmenter writes seg.json).";
+  tables.push_back(seg);
+
+  Table reloc{"Relocalization in pass 2 on pass 1's long-term map (as the paper's Table III)",
+              spread_note + " ATE in the map frame, not re-aligned.",
+              {"mode", "localized [%]", "ATE rmse [m]", "ATE max [m]"},
+              {}};
+  for (const auto& mode : modes) {
+    reloc.rows.push_back({mode, Cell(report.spreads, "pass2", mode, "localized_share", 1, 100),
+                          Cell(report.spreads, "pass2", mode, "ate_rmse_m", 4),
+                          Cell(report.spreads, "pass2", mode, "ate_max_m", 4)});
+  }
+  tables.push_back(reloc);
+
+  Table moving{"Moving-object detection vs the ground-truth tracks [%]",
+               spread_note + " Over instances SLAM judged, each (frame, instance) once; truth: tracks.json's moving flag.",
+               {"sequence", "mode", "precision", "recall"},
+               {}};
+  for (const auto& pass : kPasses) {
+    for (const auto& mode : modes) {
+      // plain knows no instances; mask-moveable drops moveable instances unjudged.
+      if (mode != "mutual") continue;
+      moving.rows.push_back({report.scenario_name + " " + pass, mode,
+                             Cell(report.spreads, pass, mode, "moving_precision", 1, 100),
+                             Cell(report.spreads, pass, mode, "moving_recall", 1, 100)});
+    }
+  }
+  if (!moving.rows.empty()) tables.push_back(moving);
+
+  Table runs{"Every run", "Seeds are the simulated segmenter's; a deterministic mode ran once.",
+             {"mode", "repeat", "seed", "pass1 ATE rmse [m]", "pass2 ATE rmse [m]", "pass2 localized [%]", "seconds",
+              "outputs"},
+             {}};
+  for (const RepeatRun& run : report.runs) {
+    std::vector<std::string> row = {run.mode, std::to_string(run.repeat),
+                                    report.bench.ModeIsDeterministic(run.mode) ? "-" : std::to_string(run.seed)};
+    for (const auto& pass : kPasses) {
+      double value = kNaN;
+      for (const PassEvaluation& p : run.evaluation.passes) {
+        if (p.name == pass && p.ate_m.has_value()) value = p.ate_m->rmse;
+      }
+      row.push_back(std::isnan(value) ? "n/a" : fmt::format("{:.4f}", value));
+    }
+    double localized = kNaN;
+    for (const PassEvaluation& p : run.evaluation.passes) {
+      if (p.name == "pass2") localized = p.LocalizedShare();
+    }
+    row.push_back(std::isnan(localized) ? "n/a" : fmt::format("{:.1f}", 100 * localized));
+    row.push_back(fmt::format("{:.1f}", run.seconds));
+    row.push_back(run.run_dir);
+    runs.rows.push_back(row);
+  }
+  tables.push_back(runs);
+  return tables;
+}
+
+// Pictures of the report, relative to the report directory, drawn by DrawReportFigures
+// with harness/report_figures.h. The mask comparison (Fig. 5) and the features kept vs
+// dropped (Fig. 6) are planned here but not drawn yet: they need the segmenter's raw
+// masks of a frame and the tracker's feature records (TrackerOptions::record_features),
+// which `scenario run` does not keep; the report shows each figure whose file exists.
+struct PlannedFigure {
+  std::string file;
+  std::string caption;
+};
+std::vector<PlannedFigure> PlannedFigures() {
+  return {{"figures/trajectories_pass1.png",
+           "Top view of pass 1: ground truth and, per mode, the run of median ATE, aligned (as the paper's Fig. 4)"},
+          {"figures/trajectories_pass2.png",
+           "Top view of pass 2, localized on pass 1's map, in pass 1's aligned frame (as the paper's Fig. 4)"},
+          {"figures/masks_raw_vs_refined.png", "Raw vs refined masks of the mutual loop (as the paper's Fig. 5)"},
+          {"figures/features_kept_vs_dropped.png", "Matched features kept vs dropped as moving (as the paper's Fig. 6)"}};
+}
+
+// The planned figures whose files exist in the report directory.
+std::vector<PlannedFigure> PresentFigures(const std::filesystem::path& report_dir) {
+  std::vector<PlannedFigure> present;
+  for (const PlannedFigure& figure : PlannedFigures()) {
+    if (!report_dir.empty() && std::filesystem::exists(report_dir / figure.file)) present.push_back(figure);
+  }
+  return present;
+}
+
+std::string StatusLine(const ScenarioReport& report) {
+  const auto passed = std::count_if(report.checks.begin(), report.checks.end(), [](const auto& c) { return c.passed; });
+  return fmt::format("{} of {} expectations passed", passed, report.checks.size());
+}
+
+}  // namespace
+
+BenchSettings BenchSettings::FromYaml(const YAML::Node& bench, const std::string& origin) {
+  BenchSettings settings;
+  if (!bench || bench.IsNull()) return settings;
+  if (!bench.IsMap()) throw Error(origin + ": bench: expected a mapping");
+  try {
+    for (const auto& entry : bench) {
+      const std::string key = entry.first.as<std::string>();
+      const YAML::Node& value = entry.second;
+      if (key == "modes") {
+        settings.modes = value.IsSequence() ? value.as<std::vector<std::string>>() : Split(value.as<std::string>(), ',');
+      } else if (key == "repeats") {
+        settings.repeats = value.as<int>();
+      } else if (key == "segmenter") {
+        settings.segmenter = value.as<std::string>();
+      } else if (key == "seed") {
+        settings.seed = value.as<std::uint64_t>();
+      } else {
+        throw Error(origin + ": unknown key 'bench." + key + "' (known: modes, repeats, segmenter, seed)");
+      }
+    }
+  } catch (const YAML::Exception& e) {
+    throw Error(origin + ": bench: " + e.msg);
+  }
+  const std::string problem = settings.Check();
+  if (!problem.empty()) throw Error(origin + ": bench: " + problem);
+  return settings;
+}
+
+std::string BenchSettings::Check() const {
+  if (modes.empty()) return "modes: at least one of plain, mask-moveable, mutual";
+  std::set<std::string> seen;
+  for (const std::string& mode : modes) {
+    if (!Contains(kKnownModes, mode)) return "modes: unknown mode '" + mode + "' (plain, mask-moveable or mutual)";
+    if (!seen.insert(mode).second) return "modes: '" + mode + "' twice";
+  }
+  if (repeats < 1) return fmt::format("repeats: must be >= 1 (got {})", repeats);
+  const std::vector<std::string> presets = seg::SimulatedSegmenterOptions::PresetNames();
+  if (segmenter != "gt" && !Contains(presets, segmenter)) {
+    return "segmenter: unknown '" + segmenter + "' (gt or " + Join(presets, ", ") + ")";
+  }
+  return "";
+}
+
+bool BenchSettings::ModeIsDeterministic(const std::string& mode) const { return mode == "plain" || segmenter == "gt"; }
+
+MetricName ParseMetricName(const std::string& text, const std::vector<std::string>& modes, const std::string& origin) {
+  auto unknown = [&](const std::string& why) {
+    return Error(origin + ": expect: unknown metric '" + text + "': " + why +
+                 " (names: [pass1.|pass2.]MODE.METRIC or [pass1.|pass2.]MODE_vs_MODE.METRIC_ratio, modes " +
+                 Join(modes, ", ") + ")");
+  };
+  std::vector<std::string> parts = Split(text, '.');
+  MetricName name;
+  name.text = text;
+  if (parts.size() == 3) {
+    if (!Contains(kPasses, parts[0])) throw unknown("'" + parts[0] + "' is not pass1 or pass2");
+    name.pass = parts[0];
+    parts.erase(parts.begin());
+  }
+  if (parts.size() != 2) throw unknown("expected MODE.METRIC");
+  const std::string& subject = parts[0];
+  std::string metric = parts[1];
+  const std::size_t vs = subject.find("_vs_");
+  if (vs != std::string::npos) {
+    name.mode = subject.substr(0, vs);
+    name.denominator_mode = subject.substr(vs + 4);
+    const std::string suffix = "_ratio";
+    if (metric.size() <= suffix.size() || metric.compare(metric.size() - suffix.size(), suffix.size(), suffix) != 0) {
+      throw unknown("a comparison of modes needs a METRIC_ratio, e.g. ate_ratio");
+    }
+    metric = metric.substr(0, metric.size() - suffix.size());
+    if (metric == "ate") metric = "ate_rmse_m";
+    if (!Contains(modes, name.denominator_mode)) throw unknown("mode '" + name.denominator_mode + "' does not run");
+  } else {
+    name.mode = subject;
+  }
+  if (!Contains(modes, name.mode)) throw unknown("mode '" + name.mode + "' does not run");
+  if (!Contains(PassMetricNames(), metric)) {
+    throw unknown("'" + metric + "' is not one of " + Join(PassMetricNames(), ", "));
+  }
+  name.metric = metric;
+  return name;
+}
+
+std::string Expectation::Bounds() const {
+  if (min.has_value() && max.has_value()) return fmt::format("in [{:g}, {:g}]", *min, *max);
+  if (min.has_value()) return fmt::format(">= {:g}", *min);
+  return fmt::format("<= {:g}", *max);
+}
+
+std::vector<Expectation> ParseExpectations(const YAML::Node& expect, const std::vector<std::string>& modes,
+                                           const std::string& origin) {
+  std::vector<Expectation> expectations;
+  if (!expect || expect.IsNull()) return expectations;
+  if (!expect.IsMap()) throw Error(origin + ": expect: expected a mapping of metric: {min: X, max: Y}");
+  for (const auto& entry : expect) {
+    const std::string text = entry.first.Scalar();
+    Expectation expectation;
+    expectation.name = ParseMetricName(text, modes, origin);
+    if (!entry.second.IsMap() || entry.second.size() == 0) {
+      throw Error(origin + ": expect: " + text + ": expected {min: X}, {max: X} or both");
+    }
+    for (const auto& bound : entry.second) {
+      const std::string key = bound.first.Scalar();
+      double value = 0;
+      try {
+        value = bound.second.as<double>();
+      } catch (const YAML::Exception&) {
+        throw Error(origin + ": expect: " + text + "." + key + ": expected a number");
+      }
+      if (!std::isfinite(value)) throw Error(origin + ": expect: " + text + "." + key + ": expected a finite number");
+      if (key == "min") {
+        expectation.min = value;
+      } else if (key == "max") {
+        expectation.max = value;
+      } else {
+        throw Error(origin + ": expect: " + text + ": unknown bound '" + key + "' (min or max)");
+      }
+    }
+    expectations.push_back(expectation);
+  }
+  return expectations;
+}
+
+Spread SpreadOf(std::vector<double> values) {
+  Spread spread;
+  spread.runs = static_cast<int>(values.size());
+  values.erase(std::remove_if(values.begin(), values.end(), [](double v) { return std::isnan(v); }), values.end());
+  spread.count = static_cast<int>(values.size());
+  if (values.empty()) {
+    spread.median = spread.min = spread.max = kNaN;
+    return spread;
+  }
+  std::sort(values.begin(), values.end());
+  const std::size_t n = values.size();
+  spread.median = n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+  spread.min = values.front();
+  spread.max = values.back();
+  return spread;
+}
+
+SpreadTable Summarize(const std::vector<RepeatRun>& runs) {
+  std::map<std::string, std::map<std::string, std::map<std::string, std::vector<double>>>> values;
+  for (const RepeatRun& run : runs) {
+    for (const PassEvaluation& pass : run.evaluation.passes) {
+      for (const auto& [metric, value] : PassMetrics(pass)) values[pass.name][run.mode][metric].push_back(value);
+    }
+  }
+  SpreadTable table;
+  for (const auto& [pass, modes] : values) {
+    for (const auto& [mode, metrics] : modes) {
+      for (const auto& [metric, list] : metrics) table[pass][mode][metric] = SpreadOf(list);
+    }
+  }
+  return table;
+}
+
+std::vector<ExpectationResult> CheckExpectations(const std::vector<Expectation>& expectations, const SpreadTable& table) {
+  std::vector<ExpectationResult> results;
+  for (const Expectation& expectation : expectations) {
+    const MetricName& name = expectation.name;
+    auto median = [&](const std::string& mode) {
+      const Spread* s = FindSpread(table, name.pass, mode, name.metric);
+      return s == nullptr ? kNaN : s->median;
+    };
+    ExpectationResult result;
+    result.expectation = expectation;
+    result.value = name.IsRatio() ? median(name.mode) / median(name.denominator_mode) : median(name.mode);
+    result.passed = std::isfinite(result.value) && (!expectation.min || result.value >= *expectation.min) &&
+                    (!expectation.max || result.value <= *expectation.max);
+    results.push_back(result);
+  }
+  return results;
+}
+
+nlohmann::json MachineDescription() {
+  char host[256] = {};
+  if (gethostname(host, sizeof(host) - 1) != 0) host[0] = '\0';
+  std::string cpu_model;
+  std::ifstream cpuinfo("/proc/cpuinfo");
+  for (std::string line; std::getline(cpuinfo, line);) {
+    if (line.rfind("model name", 0) == 0) {
+      const auto colon = line.find(':');
+      if (colon != std::string::npos) cpu_model = line.substr(line.find_first_not_of(' ', colon + 1));
+      break;
+    }
+  }
+  return {{"hostname", host}, {"cpu_model", cpu_model}, {"cores", std::thread::hardware_concurrency()}};
+}
+
+nlohmann::json ScenarioReport::ToJson() const {
+  nlohmann::json json = {
+      {"scenario", scenario_name},
+      {"scenario_file", scenario_file},
+      {"scenario_effective", effective_scenario_yaml},
+      {"overrides", overrides},
+      {"code_version", code_version},
+      {"machine", MachineDescription()},
+      {"dataset", dataset_dir},
+      {"dataset_from_cache", dataset_from_cache},
+      {"frames_per_pass", frames_per_pass},
+      {"bench",
+       {{"modes", bench.modes}, {"repeats", bench.repeats}, {"segmenter", bench.segmenter}, {"seed", bench.seed}}},
+      {"seconds", seconds},
+      {"runs", nlohmann::json::array()},
+      {"summary", nlohmann::json::object()},
+      {"expectations", nlohmann::json::array()},
+      {"passed", std::all_of(checks.begin(), checks.end(), [](const auto& c) { return c.passed; })}};
+  for (const std::string& mode : bench.modes) {
+    json["bench"]["deterministic"][mode] = bench.ModeIsDeterministic(mode);
+  }
+  for (const RepeatRun& run : runs) {
+    nlohmann::json entry = {{"mode", run.mode},       {"repeat", run.repeat},
+                            {"seed", bench.ModeIsDeterministic(run.mode) ? nlohmann::json(nullptr) : nlohmann::json(run.seed)},
+                            {"run_dir", run.run_dir}, {"seconds", run.seconds},
+                            {"evaluation", run.evaluation.ToJson()}};
+    json["runs"].push_back(entry);
+  }
+  for (const auto& [pass, modes] : spreads) {
+    for (const auto& [mode, metrics] : modes) {
+      for (const auto& [metric, s] : metrics) {
+        json["summary"][pass][mode][metric] = {{"runs", s.runs}, {"count", s.count}, {"median", NumberJson(s.median)},
+                                               {"min", NumberJson(s.min)}, {"max", NumberJson(s.max)}};
+      }
+    }
+  }
+  for (const ExpectationResult& r : checks) {
+    json["expectations"].push_back({{"metric", r.expectation.name.text},
+                                    {"min", r.expectation.min ? nlohmann::json(*r.expectation.min) : nlohmann::json(nullptr)},
+                                    {"max", r.expectation.max ? nlohmann::json(*r.expectation.max) : nlohmann::json(nullptr)},
+                                    {"value", NumberJson(r.value)},
+                                    {"passed", r.passed}});
+  }
+  return json;
+}
+
+ReportDocument ScenarioReport::ToDocument() const {
+  ReportDocument document("segslam scenario report: " + scenario_name);
+  document.AddMetadata("scenario file", scenario_file + (overrides.empty() ? "" : ", overrides " + Join(overrides, " ")));
+  document.AddMetadata("code version", code_version);
+  const nlohmann::json machine = MachineDescription();
+  document.AddMetadata("machine", fmt::format("{}, {}, {} cores", machine["hostname"].get<std::string>(),
+                                              machine["cpu_model"].get<std::string>(), machine["cores"].get<unsigned>()));
+  document.AddMetadata("dataset", dataset_dir + (dataset_from_cache ? " (from the cache)" : "") +
+                                      (frames_per_pass > 0 ? fmt::format(", first {} frames per pass", frames_per_pass) : ""));
+  document.AddMetadata("bench", fmt::format("modes {}, {} repeat(s), segmenter {} with seeds {}..{}; deterministic modes "
+                                            "ran once",
+                                            Join(bench.modes, ", "), bench.repeats, bench.segmenter, bench.seed,
+                                            bench.seed + static_cast<std::uint64_t>(bench.repeats) - 1));
+  document.AddMetadata("result", fmt::format("{} in {:.1f} s", StatusLine(*this), seconds));
+  for (const Table& table : ReportTables(*this)) {
+    document.AddHeading(table.title, 3);
+    if (!table.note.empty()) document.AddParagraph(table.note);
+    document.AddTable(ReportTable{"", table.header, table.rows});
+  }
+  document.AddHeading("Figures", 3);
+  const std::vector<PlannedFigure> figures = PresentFigures(report_dir);
+  for (const PlannedFigure& figure : figures) document.AddImage(figure.file, figure.caption);
+  if (figures.empty()) document.AddParagraph("None drawn.");
+  document.AddHeading("Effective scenario", 3);
+  document.AddParagraph("scenario.yaml beside this report holds every key of the scenario that ran, defaults and "
+                        "--set overrides included (also in results.json).");
+  return document;
+}
+
+std::string ScenarioReport::ToMarkdown() const { return ToDocument().ToMarkdown(); }
+
+std::string ScenarioReport::ToHtml() const { return ToDocument().ToHtml(); }
+
+std::vector<std::string> DrawReportFigures(const ScenarioReport& report) {
+  std::vector<std::string> problems;
+  for (const std::string& pass : kPasses) {
+    const std::string file = "figures/trajectories_" + pass + ".png";
+    try {
+      NamedTrajectory ground_truth{"ground truth",
+                                   ReadTumTrajectory(std::filesystem::path(report.dataset_dir) / pass / "groundtruth.txt")};
+      std::vector<NamedTrajectory> estimates;
+      for (const std::string& mode : report.bench.modes) {
+        // The run whose ATE is nearest the median over repeats stands for its mode.
+        const Spread* spread = FindSpread(report.spreads, pass, mode, "ate_rmse_m");
+        const RepeatRun* chosen = nullptr;
+        const PassEvaluation* chosen_pass = nullptr;
+        double best = std::numeric_limits<double>::infinity();
+        for (const RepeatRun& run : report.runs) {
+          if (run.mode != mode) continue;
+          for (const PassEvaluation& evaluation : run.evaluation.passes) {
+            if (evaluation.name != pass || !evaluation.ate_m.has_value() || spread == nullptr) continue;
+            const double distance = std::abs(evaluation.ate_m->rmse - spread->median);
+            if (distance < best) {
+              best = distance;
+              chosen = &run;
+              chosen_pass = &evaluation;
+            }
+          }
+        }
+        if (chosen == nullptr) continue;
+        std::vector<StampedPose> poses =
+            ReadTumTrajectory(report.report_dir / chosen->run_dir / pass / "trajectory.txt");
+        for (StampedPose& pose : poses) pose.T_wc = chosen_pass->T_gt_est * pose.T_wc;
+        estimates.push_back({report.bench.ModeIsDeterministic(mode) ? mode : fmt::format("{} (seed {})", mode, chosen->seed),
+                             std::move(poses)});
+      }
+      TopViewOptions options;
+      options.title = fmt::format("{} {}: top view", report.scenario_name, pass);
+      std::filesystem::create_directories(report.report_dir / "figures");
+      WriteFigure(report.report_dir / file, DrawTopView(options, ground_truth, estimates).image);
+    } catch (const Error& e) {
+      problems.push_back(file + ": " + e.what());
+    }
+  }
+  return problems;
+}
+
+std::string ScenarioReport::ToJUnitXml() const {
+  const auto failures = std::count_if(checks.begin(), checks.end(), [](const auto& c) { return !c.passed; });
+  std::string text = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
+  text += fmt::format("<testsuites>\n<testsuite name=\"{}\" tests=\"{}\" failures=\"{}\" errors=\"0\" time=\"{:.3f}\">\n",
+                      EscapeXml("segslam scenario " + scenario_name), checks.size(), failures, seconds);
+  for (const ExpectationResult& r : checks) {
+    text += fmt::format("  <testcase classname=\"{}\" name=\"{}\" time=\"0\">",
+                        EscapeXml("segslam.scenario." + scenario_name),
+                        EscapeXml(r.expectation.name.text + " " + r.expectation.Bounds()));
+    if (!r.passed) {
+      text += fmt::format("<failure message=\"{}\"/>",
+                          EscapeXml(fmt::format("median over repeats {} not {}", ValueText(r.value), r.expectation.Bounds())));
+    }
+    text += "</testcase>\n";
+  }
+  return text + "</testsuite>\n</testsuites>\n";
+}
+
+}  // namespace segslam::harness

@@ -1,0 +1,136 @@
+// `segslam eval` on runs of a generated dataset (fixture sim_datasets): the same ATE as
+// `segslam run` printed, and one-line errors for a dataset without ground truth, a run
+// folder without trajectory and a run of another sequence.
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "tests/harness/cli_runner.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using segslam::testing::CommandOutput;
+using segslam::testing::LineCount;
+using segslam::testing::ReadText;
+
+const fs::path kDataDir = SEGSLAM_TEST_DATA_DIR;
+
+class EvalCliTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("segslam_eval_" + std::to_string(::getpid()) + "_" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  CommandOutput Run(const std::string& arguments) { return segslam::testing::RunSegslam(arguments, dir_); }
+  fs::path dir_;
+};
+
+// The fields of the row of `segslam run`'s table that starts with `name`.
+std::vector<std::string> RowFields(const std::string& table, const std::string& name) {
+  std::istringstream lines(table);
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind(name + " ", 0) != 0) continue;
+    std::istringstream fields(line);
+    std::vector<std::string> result;
+    for (std::string field; fields >> field;) result.push_back(field);
+    return result;
+  }
+  ADD_FAILURE() << "no row '" << name << "' in:\n" << table;
+  return {};
+}
+
+void WriteText(const fs::path& file, const std::string& text) {
+  fs::create_directories(file.parent_path());
+  std::ofstream(file) << text;
+}
+
+TEST_F(EvalCliTest, GivesTheAteThatRunPrinted) {
+  const fs::path dataset = kDataDir / "office_seg";
+  ASSERT_TRUE(fs::is_directory(dataset)) << dataset << " missing: ctest's sim_datasets fixture makes it";
+  const fs::path run_dir = dir_ / "run";
+  const CommandOutput run = Run("run " + dataset.string() + " --mode mutual --segmenter fcis-like --seed 3 --frames 30 -q --out " +
+                                run_dir.string());
+  ASSERT_EQ(run.exit_code, 0) << run.stderr_text;
+  std::printf("%s", run.stdout_text.c_str());
+
+  const fs::path json_file = dir_ / "eval.json";
+  const CommandOutput eval = Run("eval " + run_dir.string() + " --dataset " + dataset.string() + " --json " + json_file.string());
+  ASSERT_EQ(eval.exit_code, 0) << eval.stderr_text;
+  std::printf("%s", eval.stdout_text.c_str());
+  const nlohmann::json json = nlohmann::json::parse(ReadText(json_file));
+  ASSERT_EQ(json["passes"].size(), 2u);
+  for (int i = 0; i < 2; ++i) {
+    const nlohmann::json& pass = json["passes"][i];
+    const std::string name = pass["name"];
+    // sequence frames localized keyframes points track-ms ATE-rmse ATE-max ...
+    const std::vector<std::string> printed = RowFields(run.stdout_text, name);
+    ASSERT_GE(printed.size(), 8u);
+    EXPECT_EQ(pass["frames"].get<int>(), std::stoi(printed[1]));
+    // run prints 4 decimals; eval re-reads the written trajectory (9 digits).
+    EXPECT_NEAR(pass["ate"]["translation_m"]["rmse"].get<double>(), std::stod(printed[6]), 5.1e-5) << name;
+    EXPECT_NEAR(pass["ate"]["translation_m"]["max"].get<double>(), std::stod(printed[7]), 5.1e-5) << name;
+    EXPECT_EQ(pass["ate"]["aligned"].get<bool>(), name == "pass1");
+    EXPECT_NEAR(100 * pass["localized_share"].get<double>(), std::stod(printed[2]), 0.051);
+    // The mutual loop scored its masks; eval reports seg.json's figures.
+    const nlohmann::json seg = nlohmann::json::parse(ReadText(run_dir / name / "seg.json"));
+    EXPECT_EQ(pass["segmentation"]["raw"]["mAP"], seg["raw"]["mAP"]);
+    EXPECT_EQ(pass["segmentation"]["refined"]["mIoU"], seg["refined"]["mIoU"]);
+    EXPECT_TRUE(pass["moving_detection"].is_object());
+  }
+  EXPECT_NE(eval.stdout_text.find("map frame"), std::string::npos);
+}
+
+TEST_F(EvalCliTest, DatasetWithoutGroundTruthIsOneLine) {
+  WriteText(dir_ / "sequence" / "rgb.txt", "0.000000 rgb/0.000000.png\n");
+  WriteText(dir_ / "run" / "trajectory.txt", "0.000000 0 0 0 0 0 0 1\n");
+  WriteText(dir_ / "run" / "frames.jsonl", "{\"frame\": 0, \"stamp\": 0.0, \"status\": \"tracking\", \"instances\": []}\n");
+  const CommandOutput eval = Run("eval " + (dir_ / "run").string() + " --dataset " + (dir_ / "sequence").string());
+  EXPECT_EQ(eval.exit_code, 1);
+  EXPECT_EQ(LineCount(eval.stderr_text), 1) << eval.stderr_text;
+  EXPECT_NE(eval.stderr_text.find("eval: " + (dir_ / "sequence" / "groundtruth.txt").string() + ": no ground truth"),
+            std::string::npos)
+      << eval.stderr_text;
+}
+
+TEST_F(EvalCliTest, RunFolderWithoutTrajectoryIsOneLine) {
+  const fs::path dataset = kDataDir / "office_seg";
+  ASSERT_TRUE(fs::is_directory(dataset)) << dataset << " missing: ctest's sim_datasets fixture makes it";
+  fs::create_directories(dir_ / "run" / "pass1");
+  fs::create_directories(dir_ / "run" / "pass2");
+  const fs::path json_file = dir_ / "eval.json";
+  const CommandOutput eval =
+      Run("eval " + (dir_ / "run").string() + " --dataset " + dataset.string() + " --json " + json_file.string());
+  EXPECT_EQ(eval.exit_code, 1);
+  EXPECT_EQ(LineCount(eval.stderr_text), 1) << eval.stderr_text;
+  EXPECT_NE(eval.stderr_text.find((dir_ / "run" / "pass1" / "trajectory.txt").string() + ": no trajectory"),
+            std::string::npos)
+      << eval.stderr_text;
+  EXPECT_FALSE(fs::exists(json_file));
+}
+
+TEST_F(EvalCliTest, RunOfAnotherSequenceIsRefused) {
+  const fs::path sequence = kDataDir / "office_seg" / "pass1";
+  ASSERT_TRUE(fs::is_directory(sequence)) << sequence << " missing: ctest's sim_datasets fixture makes it";
+  WriteText(dir_ / "run" / "trajectory.txt", "12345.5 0 0 0 0 0 0 1\n");
+  WriteText(dir_ / "run" / "frames.jsonl",
+            "{\"frame\": 0, \"stamp\": 12345.5, \"status\": \"tracking\", \"instances\": []}\n");
+  CommandOutput eval = Run("eval " + (dir_ / "run").string() + " --dataset " + sequence.string());
+  EXPECT_EQ(eval.exit_code, 1);
+  EXPECT_EQ(LineCount(eval.stderr_text), 1) << eval.stderr_text;
+  EXPECT_NE(eval.stderr_text.find("the run is of another sequence"), std::string::npos) << eval.stderr_text;
+  // A single-sequence run against a two-pass dataset.
+  eval = Run("eval " + (dir_ / "run").string() + " --dataset " + (kDataDir / "office_seg").string());
+  EXPECT_EQ(eval.exit_code, 1);
+  EXPECT_NE(eval.stderr_text.find("run and dataset do not match"), std::string::npos) << eval.stderr_text;
+}
+
+}  // namespace

@@ -1,0 +1,210 @@
+// EvaluateRun on small synthetic datasets and runs written here: pass 2 is scored with
+// pass 1's alignment (not re-aligned), and moving-object detection counts judged
+// instances only, against tracks.json.
+#include "harness/run_evaluation.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "core/error.h"
+#include "core/image_io.h"
+#include "core/pose.h"
+#include "core/tracks.h"
+
+namespace segslam::harness {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kFrames = 31;          // 3 s at 10 Hz: RPE over 1 s has pairs
+constexpr double kFrameIntervalS = 0.1;
+
+std::vector<StampedPose> GroundTruth(double lateral_offset_m) {
+  std::vector<StampedPose> poses;
+  for (int i = 0; i < kFrames; ++i) {
+    StampedPose pose;
+    pose.stamp_s = 100 + i * kFrameIntervalS;
+    pose.T_wc = Eigen::Isometry3d::Identity();
+    pose.T_wc.linear() = Eigen::AngleAxisd(0.05 * i, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    pose.T_wc.translation() = Eigen::Vector3d(0.3 * i, lateral_offset_m + 0.02 * i * i, 1.5);
+    poses.push_back(pose);
+  }
+  return poses;
+}
+
+std::vector<StampedPose> Moved(const Eigen::Isometry3d& T, std::vector<StampedPose> poses) {
+  for (StampedPose& pose : poses) pose.T_wc = T * pose.T_wc;
+  return poses;
+}
+
+void WriteSequence(const fs::path& dir, const std::vector<StampedPose>& ground_truth) {
+  fs::create_directories(dir);
+  std::ofstream rgb(dir / "rgb.txt");
+  for (const StampedPose& pose : ground_truth) rgb << std::fixed << pose.stamp_s << " rgb/x.png\n";
+  WriteTumTrajectory(dir / "groundtruth.txt", ground_truth, "");
+}
+
+void WriteRun(const fs::path& dir, const std::vector<StampedPose>& estimate, const std::string& instances_of_frame_0,
+              const std::string& masks = "gt") {
+  fs::create_directories(dir);
+  WriteTumTrajectory(dir / "trajectory.txt", estimate, "segslam run, mode mutual, sequence test\ninstance masks: " + masks);
+  std::ofstream frames(dir / "frames.jsonl");
+  for (std::size_t i = 0; i < estimate.size(); ++i) {
+    frames << "{\"frame\": " << i << ", \"stamp\": " << std::fixed << estimate[i].stamp_s
+           << ", \"status\": \"tracking\", \"instances\": [" << (i == 0 ? instances_of_frame_0 : "") << "]}\n";
+  }
+}
+
+class RunEvaluationTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("segslam_run_evaluation_" + std::to_string(::getpid()) + "_" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path dir_;
+};
+
+TEST_F(RunEvaluationTest, PassTwoIsScoredWithPassOnesAlignment) {
+  Eigen::Isometry3d T_est_gt = Eigen::Isometry3d::Identity();  // the run's own frame
+  T_est_gt.linear() = Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  T_est_gt.translation() = Eigen::Vector3d(2, -1, 0.5);
+  WriteSequence(dir_ / "data" / "pass1", GroundTruth(0));
+  WriteSequence(dir_ / "data" / "pass2", GroundTruth(0.5));
+  WriteRun(dir_ / "run" / "pass1", Moved(T_est_gt, GroundTruth(0)), "");
+  // Pass 2 localized in the map, but 0.1 m off along x everywhere: a re-alignment would
+  // hide that; pass 1's alignment keeps it.
+  Eigen::Isometry3d shift = Eigen::Isometry3d::Identity();
+  shift.translation() = Eigen::Vector3d(0.1, 0, 0);
+  WriteRun(dir_ / "run" / "pass2", Moved(T_est_gt * shift, GroundTruth(0.5)), "");
+
+  const RunEvaluation evaluation = EvaluateRun(dir_ / "run", dir_ / "data");
+  ASSERT_EQ(evaluation.passes.size(), 2u);
+  const PassEvaluation& pass1 = evaluation.passes[0];
+  const PassEvaluation& pass2 = evaluation.passes[1];
+  ASSERT_TRUE(pass1.ate_m.has_value());
+  ASSERT_TRUE(pass2.ate_m.has_value());
+  EXPECT_TRUE(pass1.ate_aligned);
+  EXPECT_FALSE(pass2.ate_aligned);
+  EXPECT_LT(pass1.ate_m->rmse, 1e-6);
+  EXPECT_NEAR(pass2.ate_m->rmse, 0.1, 1e-6);
+  EXPECT_EQ(pass1.mode, "mutual");
+  EXPECT_DOUBLE_EQ(pass2.LocalizedShare(), 1.0);
+  // RPE is relative: the constant shift does not change it.
+  ASSERT_TRUE(pass2.rpe_translation_m.has_value());
+  EXPECT_LT(pass2.rpe_translation_m->rmse, 1e-6);
+  EXPECT_FALSE(pass1.seg_raw.has_value());
+  EXPECT_FALSE(pass1.moving.has_value());  // no tracks.json
+  const std::map<std::string, double> metrics = PassMetrics(pass2);
+  EXPECT_NEAR(metrics.at("ate_rmse_m"), 0.1, 1e-6);
+  EXPECT_TRUE(std::isnan(metrics.at("seg_refined_map")));
+}
+
+TEST_F(RunEvaluationTest, MovingDetectionCountsJudgedInstancesAgainstTracks) {
+  const fs::path sequence = dir_ / "sequence";
+  WriteSequence(sequence, GroundTruth(0));
+  // Instances 3 and 5 move at frame 0, 4 stands still, 6 moves; 7 has no track.
+  std::vector<ObjectTrack> tracks;
+  for (const auto& [id, moving] : std::vector<std::pair<int, bool>>{{3, true}, {4, false}, {5, true}, {6, true}}) {
+    ObjectTrack track;
+    track.instance_id = static_cast<std::uint16_t>(id);
+    TrackSample sample;
+    sample.frame = 0;
+    sample.stamp_s = 100;
+    sample.moving = moving;
+    track.samples.push_back(sample);
+    tracks.push_back(track);
+  }
+  WriteTracks(sequence / "tracks.json", tracks);
+  const std::string judgements =
+      "{\"id\": 3, \"judged\": true, \"moving\": true},"    // true positive
+      "{\"id\": 4, \"judged\": true, \"moving\": true},"    // false positive
+      "{\"id\": 5, \"judged\": true, \"moving\": false},"   // false negative
+      "{\"id\": 6, \"judged\": false, \"moving\": false},"  // not judged: not counted
+      "{\"id\": 7, \"judged\": true, \"moving\": false}";   // no track: truly static, true negative
+  WriteRun(dir_ / "run", GroundTruth(0), judgements);
+
+  const RunEvaluation evaluation = EvaluateRun(dir_ / "run", sequence);
+  ASSERT_EQ(evaluation.passes.size(), 1u);
+  ASSERT_TRUE(evaluation.passes[0].moving.has_value());
+  const MovingDetectionScores& scores = *evaluation.passes[0].moving;
+  EXPECT_EQ(scores.true_positives, 1);
+  EXPECT_EQ(scores.false_positives, 1);
+  EXPECT_EQ(scores.false_negatives, 1);
+  EXPECT_EQ(scores.true_negatives, 1);
+  EXPECT_EQ(scores.Judged(), 4);
+  EXPECT_DOUBLE_EQ(scores.Precision(), 0.5);
+  EXPECT_DOUBLE_EQ(scores.Recall(), 0.5);
+  EXPECT_TRUE(std::isnan(MovingDetectionScores{}.Precision()));
+}
+
+// A segmenter's ids carry no ground-truth identity: each judged instance stands for the
+// ground-truth instance its refined mask covers most.
+TEST_F(RunEvaluationTest, SegmenterInstancesAreRelatedToGroundTruthByTheirMasks) {
+  const fs::path sequence = dir_ / "sequence";
+  WriteSequence(sequence, GroundTruth(0));
+  std::vector<ObjectTrack> tracks;
+  for (const auto& [id, moving] : std::vector<std::pair<int, bool>>{{3, true}, {4, false}}) {
+    ObjectTrack track;
+    track.instance_id = static_cast<std::uint16_t>(id);
+    TrackSample sample;
+    sample.stamp_s = 100;
+    sample.moving = moving;
+    track.samples.push_back(sample);
+    tracks.push_back(track);
+  }
+  WriteTracks(sequence / "tracks.json", tracks);
+  // Ground truth: instance 3 on the left half, 4 on the right half (40 x 20 pixels).
+  cv::Mat gt_ids(20, 40, CV_16U, cv::Scalar(0));
+  gt_ids(cv::Rect(0, 0, 20, 20)).setTo(3);
+  gt_ids(cv::Rect(20, 0, 20, 20)).setTo(4);
+  fs::create_directories(sequence / "masks");
+  WriteInstanceMask(sequence / "masks" / "x.png", gt_ids);
+  // The refined mask: segmenter id 1 mostly over 3, id 2 mostly over 4, id 5 on nothing.
+  cv::Mat run_ids(20, 40, CV_16U, cv::Scalar(0));
+  run_ids(cv::Rect(2, 0, 22, 10)).setTo(1);
+  run_ids(cv::Rect(18, 10, 20, 10)).setTo(2);
+  const std::string judgements =
+      "{\"id\": 1, \"judged\": true, \"moving\": true},"    // over moving 3: true positive
+      "{\"id\": 2, \"judged\": true, \"moving\": true},"    // over static 4: false positive
+      "{\"id\": 5, \"judged\": true, \"moving\": false}";   // no pixels: background, true negative
+  WriteRun(dir_ / "run", GroundTruth(0), judgements, "simulated fcis-like seed 1");
+  fs::create_directories(dir_ / "run" / "refined_masks");
+  WriteInstanceMask(dir_ / "run" / "refined_masks" / "x.png", run_ids);
+
+  RunEvaluation evaluation = EvaluateRun(dir_ / "run", sequence);
+  ASSERT_TRUE(evaluation.passes[0].moving.has_value()) << evaluation.passes[0].moving_missing_reason;
+  const MovingDetectionScores& scores = *evaluation.passes[0].moving;
+  EXPECT_EQ(scores.true_positives, 1);
+  EXPECT_EQ(scores.false_positives, 1);
+  EXPECT_EQ(scores.false_negatives, 0);
+  EXPECT_EQ(scores.true_negatives, 1);
+
+  // Without the masks the ids mean nothing: not scored, and the reason says so.
+  fs::remove_all(dir_ / "run" / "refined_masks");
+  evaluation = EvaluateRun(dir_ / "run", sequence);
+  EXPECT_FALSE(evaluation.passes[0].moving.has_value());
+  EXPECT_NE(evaluation.passes[0].moving_missing_reason.find("no ground-truth identity"), std::string::npos);
+}
+
+TEST_F(RunEvaluationTest, RunWithoutFrameLogNamesTheFile) {
+  WriteSequence(dir_ / "sequence", GroundTruth(0));
+  fs::create_directories(dir_ / "run");
+  WriteTumTrajectory(dir_ / "run" / "trajectory.txt", GroundTruth(0), "");
+  try {
+    EvaluateRun(dir_ / "run", dir_ / "sequence");
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find((dir_ / "run" / "frames.jsonl").string()), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace segslam::harness

@@ -1,0 +1,129 @@
+// `segslam scenario run` end to end on a tiny office (scenarios/test/office_small.yaml,
+// 25 frames per pass at 320x240): the report files, JUnit XML, and an exit code that
+// follows the thresholds; and an unknown metric refused before any work.
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "tests/harness/cli_runner.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using segslam::testing::CommandOutput;
+using segslam::testing::LineCount;
+using segslam::testing::ReadText;
+
+const fs::path kSmallOffice = fs::path(SEGSLAM_SOURCE_DIR) / "scenarios" / "test" / "office_small.yaml";
+
+class ScenarioCliTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("segslam_scenario_" + std::to_string(::getpid()) + "_" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  CommandOutput Run(const std::string& arguments) { return segslam::testing::RunSegslam(arguments, dir_); }
+
+  // office_small.yaml with extra sections appended.
+  fs::path WriteScenario(const std::string& name, const std::string& sections) {
+    const fs::path file = dir_ / (name + ".yaml");
+    std::ofstream(file) << ReadText(kSmallOffice) << sections;
+    return file;
+  }
+  fs::path dir_;
+};
+
+int Count(const std::string& text, const std::string& what) {
+  int count = 0;
+  for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++count;
+  return count;
+}
+
+TEST_F(ScenarioCliTest, UnknownMetricFailsBeforeAnyWork) {
+  const fs::path scenario = WriteScenario("bad", "expect:\n  mutual.ate_rmse: {max: 0.05}\n");
+  const CommandOutput result = Run("scenario run " + scenario.string() + " --cache " + (dir_ / "cache").string() +
+                                   " --out " + (dir_ / "report").string() + " -q");
+  EXPECT_EQ(result.exit_code, 1);
+  EXPECT_EQ(LineCount(result.stderr_text), 1) << result.stderr_text;
+  EXPECT_NE(result.stderr_text.find(scenario.string() + ": expect: unknown metric 'mutual.ate_rmse'"), std::string::npos)
+      << result.stderr_text;
+  EXPECT_FALSE(fs::exists(dir_ / "cache"));
+  EXPECT_FALSE(fs::exists(dir_ / "report"));
+
+  // A mode that does not run is as unknown as a metric.
+  const fs::path other = WriteScenario("other", "expect:\n  mask-moveable.ate_rmse_m: {max: 0.05}\n");
+  const CommandOutput modes = Run("scenario run " + other.string() + " --modes plain,mutual --cache " +
+                                  (dir_ / "cache").string() + " -q");
+  EXPECT_EQ(modes.exit_code, 1);
+  EXPECT_NE(modes.stderr_text.find("mode 'mask-moveable' does not run"), std::string::npos) << modes.stderr_text;
+  EXPECT_FALSE(fs::exists(dir_ / "cache"));
+}
+
+TEST_F(ScenarioCliTest, TinyRunWritesTheReportAndItsExitCodeFollowsTheThresholds) {
+  const std::string cache = (dir_ / "cache").string();
+  const std::string common = " --frames 25 --repeats 2 --modes plain,mutual -q --cache " + cache;
+
+  const fs::path passing = WriteScenario("passing",
+                                         "bench: {segmenter: fcis-like, seed: 4}\n"
+                                         "expect:\n"
+                                         "  plain.localized_share: {min: 0.5}\n"
+                                         "  pass2.mutual.localized_share: {min: 0}\n"
+                                         "  mutual_vs_plain.ate_ratio: {max: 1000}\n");
+  const fs::path report = dir_ / "report";
+  const fs::path junit = dir_ / "junit.xml";
+  const CommandOutput pass = Run("scenario run " + passing.string() + common + " --out " + report.string() +
+                                 " --junit " + junit.string());
+  std::printf("%s", pass.stdout_text.c_str());
+  ASSERT_EQ(pass.exit_code, 0) << pass.stdout_text << pass.stderr_text;
+  EXPECT_NE(pass.stdout_text.find("3 of 3 expectations passed"), std::string::npos);
+  for (const char* file : {"results.json", "report.md", "report.html", "figures/trajectories_pass1.png",
+                           "figures/trajectories_pass2.png"}) {
+    EXPECT_TRUE(fs::exists(report / file)) << file;
+  }
+
+  const nlohmann::json results = nlohmann::json::parse(ReadText(report / "results.json"));
+  EXPECT_EQ(results["scenario"], "office_small");
+  EXPECT_EQ(results["passed"], true);
+  EXPECT_FALSE(results["code_version"].get<std::string>().empty());
+  EXPECT_GT(results["machine"]["cores"].get<int>(), 0);
+  // plain is deterministic: one run; mutual: two seeds.
+  ASSERT_EQ(results["runs"].size(), 3u);
+  EXPECT_EQ(results["runs"][1]["seed"], 4);
+  EXPECT_EQ(results["runs"][2]["seed"], 5);
+  EXPECT_EQ(results["summary"]["pass1"]["mutual"]["ate_rmse_m"]["count"], 2);
+  EXPECT_EQ(results["runs"][2]["evaluation"]["passes"][0]["frames"], 25);
+  const std::string markdown = ReadText(report / "report.md");
+  EXPECT_NE(markdown.find("per sequence and mode (as the paper's Table I)"), std::string::npos);
+  EXPECT_NE(markdown.find("Relocalization in pass 2"), std::string::npos);
+  EXPECT_NE(markdown.find("raw vs refined"), std::string::npos);
+  EXPECT_NE(markdown.find("figures/trajectories_pass2.png"), std::string::npos);
+  const std::string xml = ReadText(junit);
+  EXPECT_EQ(Count(xml, "<testcase "), 3) << xml;
+  EXPECT_EQ(Count(xml, "<failure"), 0) << xml;
+
+  // The thresholds are no part of the dataset: the second run reuses it and fails.
+  const fs::path failing = WriteScenario("failing",
+                                         "bench: {segmenter: fcis-like, seed: 4}\n"
+                                         "expect:\n"
+                                         "  mutual.ate_rmse_m: {max: 0.0000001}\n"
+                                         "  plain.localized_share: {min: 0.5}\n");
+  const CommandOutput fail = Run("scenario run " + failing.string() + common + " --out " + (dir_ / "report2").string() +
+                                 " --junit " + junit.string());
+  std::printf("%s", fail.stdout_text.c_str());
+  EXPECT_EQ(fail.exit_code, 2) << fail.stderr_text;
+  EXPECT_NE(fail.stdout_text.find("(cached)"), std::string::npos);
+  EXPECT_NE(fail.stdout_text.find("FAIL  mutual.ate_rmse_m"), std::string::npos);
+  EXPECT_NE(fail.stdout_text.find("1 of 2 expectations passed"), std::string::npos);
+  const std::string failed_xml = ReadText(junit);
+  EXPECT_EQ(Count(failed_xml, "<testcase "), 2) << failed_xml;
+  EXPECT_EQ(Count(failed_xml, "<failure"), 1) << failed_xml;
+}
+
+}  // namespace

@@ -1,0 +1,105 @@
+// The metric names of `expect:`, the median over repeats and the threshold checks.
+#include "harness/scenario_report.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "core/error.h"
+
+namespace segslam::harness {
+namespace {
+
+const std::vector<std::string> kModes = {"plain", "mask-moveable", "mutual"};
+
+std::string ParseError(const std::string& text, const std::vector<std::string>& modes = kModes) {
+  try {
+    ParseMetricName(text, modes, "s.yaml");
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(ScenarioReportTest, MetricNamesFollowTheScheme) {
+  MetricName name = ParseMetricName("mutual.ate_rmse_m", kModes, "s.yaml");
+  EXPECT_EQ(name.pass, "pass1");
+  EXPECT_EQ(name.mode, "mutual");
+  EXPECT_EQ(name.metric, "ate_rmse_m");
+  EXPECT_FALSE(name.IsRatio());
+
+  name = ParseMetricName("pass2.mutual.localized_share", kModes, "s.yaml");
+  EXPECT_EQ(name.pass, "pass2");
+  EXPECT_EQ(name.metric, "localized_share");
+
+  name = ParseMetricName("mutual_vs_plain.ate_ratio", kModes, "s.yaml");
+  EXPECT_EQ(name.mode, "mutual");
+  EXPECT_EQ(name.denominator_mode, "plain");
+  EXPECT_EQ(name.metric, "ate_rmse_m");
+
+  name = ParseMetricName("pass2.mask-moveable_vs_plain.rpe_trans_rmse_m_ratio", kModes, "s.yaml");
+  EXPECT_EQ(name.mode, "mask-moveable");
+  EXPECT_EQ(name.metric, "rpe_trans_rmse_m");
+}
+
+TEST(ScenarioReportTest, UnknownMetricNamesAreRefused) {
+  EXPECT_NE(ParseError("mutual.ate").find("s.yaml: expect: unknown metric 'mutual.ate'"), std::string::npos);
+  EXPECT_NE(ParseError("pass3.mutual.ate_rmse_m").find("'pass3' is not pass1 or pass2"), std::string::npos);
+  EXPECT_NE(ParseError("mutual_vs_plain.ate_rmse_m").find("METRIC_ratio"), std::string::npos);
+  EXPECT_NE(ParseError("slow.ate_rmse_m").find("mode 'slow' does not run"), std::string::npos);
+  EXPECT_NE(ParseError("mutual.ate_rmse_m", {"plain"}).find("mode 'mutual' does not run"), std::string::npos);
+  EXPECT_NE(ParseError("ate_rmse_m").find("expected MODE.METRIC"), std::string::npos);
+}
+
+TEST(ScenarioReportTest, BoundsAreChecked) {
+  const YAML::Node bad = YAML::Load("{mutual.ate_rmse_m: {below: 1}}");
+  EXPECT_THROW(ParseExpectations(bad, kModes, "s.yaml"), Error);
+  const YAML::Node not_number = YAML::Load("{mutual.ate_rmse_m: {max: low}}");
+  EXPECT_THROW(ParseExpectations(not_number, kModes, "s.yaml"), Error);
+  const YAML::Node good = YAML::Load("{mutual.ate_rmse_m: {min: 0.001, max: 0.05}}");
+  const std::vector<Expectation> parsed = ParseExpectations(good, kModes, "s.yaml");
+  ASSERT_EQ(parsed.size(), 1u);
+  EXPECT_EQ(parsed[0].Bounds(), "in [0.001, 0.05]");
+}
+
+TEST(ScenarioReportTest, SpreadIsNumpysMedianOverValuesThatExist) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const Spread spread = SpreadOf({4, 1, nan, 3, 2});
+  EXPECT_EQ(spread.runs, 5);
+  EXPECT_EQ(spread.count, 4);
+  EXPECT_DOUBLE_EQ(spread.median, 2.5);
+  EXPECT_DOUBLE_EQ(spread.min, 1);
+  EXPECT_DOUBLE_EQ(spread.max, 4);
+  EXPECT_TRUE(std::isnan(SpreadOf({nan}).median));
+}
+
+TEST(ScenarioReportTest, ChecksUseMediansAndRatiosOfMedians) {
+  SpreadTable table;
+  table["pass1"]["mutual"]["ate_rmse_m"] = SpreadOf({0.02, 0.04, 0.03});
+  table["pass1"]["plain"]["ate_rmse_m"] = SpreadOf({0.1});
+  const std::vector<Expectation> expectations =
+      ParseExpectations(YAML::Load("{mutual.ate_rmse_m: {max: 0.05}, mutual_vs_plain.ate_ratio: {max: 0.2},"
+                                   " pass2.mutual.ate_rmse_m: {max: 1}}"),
+                        kModes, "s.yaml");
+  const std::vector<ExpectationResult> results = CheckExpectations(expectations, table);
+  ASSERT_EQ(results.size(), 3u);
+  EXPECT_TRUE(results[0].passed);
+  EXPECT_DOUBLE_EQ(results[0].value, 0.03);
+  EXPECT_FALSE(results[1].passed);  // 0.3 > 0.2
+  EXPECT_DOUBLE_EQ(results[1].value, 0.3);
+  EXPECT_FALSE(results[2].passed);  // no pass-2 value: NaN fails
+}
+
+TEST(ScenarioReportTest, BenchSectionIsChecked) {
+  const BenchSettings bench =
+      BenchSettings::FromYaml(YAML::Load("{modes: [plain, mutual], repeats: 3, segmenter: gt, seed: 9}"), "s.yaml");
+  EXPECT_EQ(bench.modes.size(), 2u);
+  EXPECT_TRUE(bench.ModeIsDeterministic("mutual"));
+  EXPECT_THROW(BenchSettings::FromYaml(YAML::Load("{repeat: 3}"), "s.yaml"), Error);
+  EXPECT_THROW(BenchSettings::FromYaml(YAML::Load("{modes: [fast]}"), "s.yaml"), Error);
+  EXPECT_THROW(BenchSettings::FromYaml(YAML::Load("{segmenter: magic}"), "s.yaml"), Error);
+}
+
+}  // namespace
+}  // namespace segslam::harness
