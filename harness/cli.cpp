@@ -28,6 +28,7 @@ int RunCli(int argc, char** argv) {
   AddRunCommand(app, &action);
   AddEvalCommand(app, &action);
   AddScenarioCommand(app, &action);
+  AddSweepCommand(app, &action);
 
   try {
     app.parse(argc, argv);

@@ -16,5 +16,6 @@ void AddEvalTrajCommand(CLI::App& app, std::function<int()>* action);
 void AddRunCommand(CLI::App& app, std::function<int()>* action);
 void AddEvalCommand(CLI::App& app, std::function<int()>* action);
 void AddScenarioCommand(CLI::App& app, std::function<int()>* action);
+void AddSweepCommand(CLI::App& app, std::function<int()>* action);
 
 }  // namespace segslam::harness

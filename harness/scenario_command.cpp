@@ -33,6 +33,7 @@
 #include "harness/progress_bar.h"
 #include "harness/run_evaluation.h"
 #include "harness/scenario_report.h"
+#include "harness/scenario_runner.h"
 #include "scenes/scenario.h"
 #include "sim/dataset_generator.h"
 
@@ -43,19 +44,7 @@ namespace fs = std::filesystem;
 
 constexpr int kExitExpectationFailed = 2;
 
-struct ScenarioRunArgs {
-  std::string scenario_file;
-  std::string out_dir;
-  std::string cache_dir = "data/cache";
-  std::string modes;      // comma-separated; empty = the scenario's bench.modes
-  int repeats = 0;        // 0 = the scenario's bench.repeats
-  std::string segmenter;  // empty = the scenario's bench.segmenter
-  int frames = 0;
-  std::string junit_file;
-  std::string gl = "osmesa";
-  std::vector<std::string> overrides;
-  bool quiet = false;
-};
+using ScenarioRunArgs = ScenarioRunRequest;
 
 // "city.moving_cars=8" -> ("city.moving_cars", "8")
 std::pair<std::string, std::string> SplitOverride(const std::string& text) {
@@ -98,7 +87,9 @@ std::string Metres(const std::optional<ErrorStatistics>& ate) {
   return ate.has_value() ? fmt::format("{:.4f} m", ate->rmse) : "n/a";
 }
 
-int RunScenario(const ScenarioRunArgs& args) {
+}  // namespace
+
+ScenarioReport RunScenarioToReport(const ScenarioRunRequest& args) {
   const auto start = std::chrono::steady_clock::now();
   // Everything that can be refused is checked before any work starts.
   scenes::Scenario scenario = scenes::LoadScenario(args.scenario_file);
@@ -141,7 +132,7 @@ int RunScenario(const ScenarioRunArgs& args) {
   } else {
     fs::create_directories(dataset.parent_path());
     generate_options.overwrite = true;  // a folder there that is not a dataset is replaced
-    ProgressBar bar("generate " + scenario.name);
+    ProgressBar bar(args.progress_prefix + "generate " + scenario.name);
     const sim::GenerateSummary summary =
         sim::GenerateDataset(scenario, dataset, generate_options, [&](const sim::GenerationProgress& p) {
           if (!args.quiet) bar.Update(p.frames_done, p.frames_total, p.frames_per_second, fmt::format("pass{}", p.pass_index + 1));
@@ -186,7 +177,7 @@ int RunScenario(const ScenarioRunArgs& args) {
         if (args.quiet) return;
         if (!bar.has_value() || bar_pass != pass) {
           if (bar.has_value()) bar->Finish();
-          bar.emplace(fmt::format("[{}/{}] {} {}", done_runs + 1, total_runs, mode, pass));
+          bar.emplace(fmt::format("{}[{}/{}] {} {}", args.progress_prefix, done_runs + 1, total_runs, mode, pass));
           bar_pass = pass;
         }
         const auto now = std::chrono::steady_clock::now();
@@ -199,7 +190,7 @@ int RunScenario(const ScenarioRunArgs& args) {
       run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - run_start).count();
       run.evaluation = EvaluateRun(report_dir / run.run_dir, dataset);
       ++done_runs;
-      std::string line = fmt::format("[{}/{}] {:<13} {:<7}", done_runs, total_runs, mode,
+      std::string line = fmt::format("{}[{}/{}] {:<13} {:<7}", args.progress_prefix, done_runs, total_runs, mode,
                                      deterministic ? "" : fmt::format("seed {}", run.seed));
       for (const PassEvaluation& pass : run.evaluation.passes) {
         line += fmt::format("  {} ATE {} localized {:.0f}%", pass.name, Metres(pass.ate_m), 100 * pass.LocalizedShare());
@@ -230,7 +221,15 @@ int RunScenario(const ScenarioRunArgs& args) {
   WriteFileAtomically(report_dir / "report.md", report.ToMarkdown());
   WriteFileAtomically(report_dir / "report.html", report.ToHtml());
   if (!args.junit_file.empty()) WriteFileAtomically(args.junit_file, report.ToJUnitXml());
+  return report;
+}
 
+namespace {
+
+int RunScenario(const ScenarioRunArgs& args) {
+  const ScenarioReport report = RunScenarioToReport(args);
+  const std::string& scenario_name = report.scenario_name;
+  const fs::path& report_dir = report.report_dir;
   int failed = 0;
   if (!report.checks.empty()) fmt::print("\nexpectations (medians over repeats):\n");
   for (const ExpectationResult& check : report.checks) {
@@ -239,7 +238,7 @@ int RunScenario(const ScenarioRunArgs& args) {
                check.expectation.Bounds());
     if (!check.passed) ++failed;
   }
-  fmt::print("scenario {}: {} of {} expectations passed, {} runs in {:.1f} s, report in {}\n", scenario.name,
+  fmt::print("scenario {}: {} of {} expectations passed, {} runs in {:.1f} s, report in {}\n", scenario_name,
              report.checks.size() - failed, report.checks.size(), report.runs.size(), report.seconds,
              report_dir.string());
   return failed == 0 ? 0 : kExitExpectationFailed;

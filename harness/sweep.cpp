@@ -1,0 +1,384 @@
+#include "harness/sweep.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <optional>
+#include <set>
+#include <sstream>
+
+#include <fmt/format.h>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "harness/report_document.h"
+#include "harness/report_figures.h"
+
+namespace segslam::harness {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+const std::vector<std::string> kModeOrder = {"plain", "mask-moveable", "mutual"};
+
+std::vector<std::string> SplitValues(const std::string& text) {
+  if (!text.empty() && text.front() == '[') return {text};
+  std::vector<std::string> values;
+  std::string rest = text;
+  for (std::size_t comma; (comma = rest.find(',')) != std::string::npos; rest = rest.substr(comma + 1)) {
+    values.push_back(rest.substr(0, comma));
+  }
+  values.push_back(rest);
+  return values;
+}
+
+nlohmann::json ReadJson(const fs::path& path) {
+  std::ifstream in(path);
+  if (!in) throw Error(path.string() + ": cannot be read");
+  try {
+    return nlohmann::json::parse(in);
+  } catch (const nlohmann::json::exception& e) {
+    throw Error(path.string() + ": not valid JSON (" + e.what() + ")");
+  }
+}
+
+// The median, min and max of one metric of one mode and pass in a point's results.json;
+// NaN where the point has no value.
+struct PointValue {
+  double median = kNaN, min = kNaN, max = kNaN;
+};
+
+double NumberOrNaN(const nlohmann::json& json, const char* key) {
+  return json.contains(key) && json[key].is_number() ? json[key].get<double>() : kNaN;
+}
+
+PointValue ValueOf(const nlohmann::json& results, const std::string& pass, const std::string& mode,
+                   const std::string& metric) {
+  if (!results.contains("summary")) return {};
+  const nlohmann::json& summary = results["summary"];
+  if (!summary.contains(pass) || !summary[pass].contains(mode) || !summary[pass][mode].contains(metric)) return {};
+  const nlohmann::json& s = summary[pass][mode][metric];
+  return {NumberOrNaN(s, "median"), NumberOrNaN(s, "min"), NumberOrNaN(s, "max")};
+}
+
+std::string Cell(double value, const char* format) {
+  return std::isnan(value) ? std::string("n/a") : fmt::format(fmt::runtime(format), value);
+}
+
+std::string Spread(const PointValue& v, const char* format) {
+  if (std::isnan(v.median)) return "n/a";
+  if (v.min == v.max) return Cell(v.median, format);
+  return Cell(v.median, format) + " [" + Cell(v.min, format) + ", " + Cell(v.max, format) + "]";
+}
+
+std::string Join(const std::vector<std::string>& parts, const std::string& separator) {
+  std::string out;
+  for (const std::string& part : parts) out += (out.empty() ? "" : separator) + part;
+  return out;
+}
+
+// The x coordinate of each value of an axis: the number where every value is one, else
+// the position (the plot's ticks then count points).
+std::vector<double> AxisCoordinates(const SweepAxis& axis, bool* numeric) {
+  std::vector<double> x;
+  *numeric = true;
+  for (const std::string& value : axis.values) {
+    try {
+      std::size_t used = 0;
+      x.push_back(std::stod(value, &used));
+      if (used != value.size()) *numeric = false;
+    } catch (const std::exception&) {
+      *numeric = false;
+    }
+  }
+  if (*numeric && std::is_sorted(x.begin(), x.end()) &&
+      std::adjacent_find(x.begin(), x.end()) == x.end()) {
+    return x;
+  }
+  *numeric = false;
+  x.clear();
+  for (std::size_t i = 0; i < axis.values.size(); ++i) x.push_back(static_cast<double>(i));
+  return x;
+}
+
+struct PlotSpec {
+  std::string file;     // under figures/
+  std::string pass;
+  std::string metric;
+  std::string title;
+  std::string y_label;
+  std::vector<std::string> modes;  // empty = every mode that ran
+};
+
+}  // namespace
+
+SweepGrid SweepGrid::FromSetOptions(const std::vector<std::string>& set_options) {
+  SweepGrid grid;
+  for (const std::string& option : set_options) {
+    const std::size_t equals = option.find('=');
+    if (equals == std::string::npos || equals == 0 || equals + 1 == option.size()) {
+      throw Error("sweep --set " + option + ": expected KEY=VALUE or KEY=V1,V2,..., e.g. city.moving_cars=0,4,8");
+    }
+    const std::string key = option.substr(0, equals);
+    const std::vector<std::string> values = SplitValues(option.substr(equals + 1));
+    for (const std::string& value : values) {
+      if (value.empty()) throw Error("sweep --set " + option + ": an empty value");
+    }
+    if (values.size() == 1) {
+      grid.fixed_overrides.push_back(option);
+    } else {
+      grid.axes.push_back({key, values});
+    }
+  }
+  return grid;
+}
+
+int SweepGrid::PointCount() const {
+  int count = 1;
+  for (const SweepAxis& axis : axes) count *= static_cast<int>(axis.values.size());
+  return count;
+}
+
+std::vector<std::string> SweepGrid::PointAssignments(int index) const {
+  std::vector<std::string> assignments(axes.size());
+  for (int a = static_cast<int>(axes.size()) - 1; a >= 0; --a) {
+    const int n = static_cast<int>(axes[a].values.size());
+    assignments[a] = axes[a].key + "=" + axes[a].values[index % n];
+    index /= n;
+  }
+  return assignments;
+}
+
+std::string SweepGrid::PointName(int index) const {
+  std::string name = Join(PointAssignments(index), "__");
+  for (char& c : name) {
+    const bool plain = std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '_' || c == '=' || c == '-';
+    if (!plain) c = '_';
+  }
+  return name.empty() ? "single" : name;
+}
+
+nlohmann::json SweepGrid::ToJson() const {
+  nlohmann::json json = {{"axes", nlohmann::json::array()}, {"fixed_overrides", fixed_overrides}};
+  for (const SweepAxis& axis : axes) json["axes"].push_back({{"key", axis.key}, {"values", axis.values}});
+  return json;
+}
+
+SweepGrid SweepGrid::FromJson(const nlohmann::json& json, const std::string& origin) {
+  SweepGrid grid;
+  try {
+    for (const auto& axis : json.at("axes")) {
+      grid.axes.push_back({axis.at("key").get<std::string>(), axis.at("values").get<std::vector<std::string>>()});
+    }
+    grid.fixed_overrides = json.at("fixed_overrides").get<std::vector<std::string>>();
+  } catch (const nlohmann::json::exception& e) {
+    throw Error(origin + ": not a sweep grid (" + e.what() + ")");
+  }
+  return grid;
+}
+
+Shard Shard::Parse(const std::string& text) {
+  Shard shard;
+  const std::size_t slash = text.find('/');
+  try {
+    if (slash == std::string::npos) throw std::invalid_argument(text);
+    std::size_t used_index = 0, used_count = 0;
+    shard.index = std::stoi(text.substr(0, slash), &used_index);
+    shard.count = std::stoi(text.substr(slash + 1), &used_count);
+    if (used_index != slash || used_count != text.size() - slash - 1) throw std::invalid_argument(text);
+  } catch (const std::exception&) {
+    throw Error("sweep --shard " + text + ": expected I/N, e.g. 2/4");
+  }
+  if (shard.count < 1 || shard.index < 1 || shard.index > shard.count) {
+    throw Error("sweep --shard " + text + ": needs 1 <= I <= N");
+  }
+  return shard;
+}
+
+std::string MergeSweep(const std::vector<fs::path>& inputs, const fs::path& out_dir) {
+  if (inputs.empty()) throw Error("sweep merge: no sweep folders given");
+  const fs::path grid_file = inputs.front() / "sweep.json";
+  const nlohmann::json sweep = ReadJson(grid_file);
+  const SweepGrid grid = SweepGrid::FromJson(sweep.value("grid", nlohmann::json::object()), grid_file.string());
+  for (std::size_t i = 1; i < inputs.size(); ++i) {
+    const fs::path other = inputs[i] / "sweep.json";
+    if (ReadJson(other).value("grid", nlohmann::json::object()) != sweep["grid"]) {
+      throw Error("sweep merge: " + other.string() + " holds another grid than " + grid_file.string());
+    }
+  }
+
+  // Every point's results, from the first input that has them.
+  const int points = grid.PointCount();
+  std::vector<nlohmann::json> results(points);
+  std::vector<std::string> missing;
+  for (int p = 0; p < points; ++p) {
+    const std::string name = grid.PointName(p);
+    bool found = false;
+    for (const fs::path& input : inputs) {
+      const fs::path file = input / "points" / name / "results.json";
+      if (!fs::exists(file)) continue;
+      results[p] = ReadJson(file);
+      const fs::path target = out_dir / "points" / name / "results.json";
+      if (!fs::exists(target) || !fs::equivalent(file, target)) {
+        fs::create_directories(target.parent_path());
+        WriteFileAtomically(target, results[p].dump(2) + "\n");
+      }
+      found = true;
+      break;
+    }
+    if (!found) missing.push_back(name);
+  }
+  if (!missing.empty()) {
+    throw Error(fmt::format("sweep merge: {} of {} points have no results.json in {}: {}", missing.size(), points,
+                            inputs.size() == 1 ? inputs.front().string() : "any of the folders given",
+                            Join(missing, ", ")));
+  }
+
+  // The modes, in the paper's order, that ran at any point.
+  std::vector<std::string> modes;
+  for (const std::string& mode : kModeOrder) {
+    for (const nlohmann::json& r : results) {
+      const nlohmann::json ran = r.contains("bench") ? r["bench"].value("modes", nlohmann::json::array())
+                                                     : nlohmann::json::array();
+      if (std::find(ran.begin(), ran.end(), mode) != ran.end()) {
+        modes.push_back(mode);
+        break;
+      }
+    }
+  }
+  const bool two_pass = std::any_of(results.begin(), results.end(),
+                                    [](const nlohmann::json& r) { return r.contains("summary") && r["summary"].contains("pass2"); });
+
+  // The table: a row per point, a column group per mode.
+  ReportTable table;
+  table.caption = "Median over repeats [min, max]; pass 2 scored in the pass-1 map frame";
+  for (const SweepAxis& axis : grid.axes) table.header.push_back(axis.key);
+  for (const std::string& mode : modes) {
+    table.header.push_back(mode + " ATE p1 [m]");
+    if (two_pass) {
+      table.header.push_back(mode + " ATE p2 [m]");
+      table.header.push_back(mode + " localized p2");
+    }
+  }
+  const bool has_plain = std::find(modes.begin(), modes.end(), "plain") != modes.end();
+  const bool has_mutual = std::find(modes.begin(), modes.end(), "mutual") != modes.end();
+  if (has_plain && has_mutual) {
+    table.header.push_back("mutual/plain ATE p1");
+    if (two_pass) table.header.push_back("mutual/plain ATE p2");
+  }
+  if (has_mutual) table.header.push_back("mutual mIoU raw -> refined");
+  nlohmann::json merged = {{"grid", grid.ToJson()}, {"points", nlohmann::json::array()}};
+  for (int p = 0; p < points; ++p) {
+    const nlohmann::json& r = results[p];
+    std::vector<std::string> row;
+    for (const std::string& assignment : grid.PointAssignments(p)) row.push_back(assignment.substr(assignment.find('=') + 1));
+    for (const std::string& mode : modes) {
+      row.push_back(Spread(ValueOf(r, "pass1", mode, "ate_rmse_m"), "{:.4f}"));
+      if (two_pass) {
+        row.push_back(Spread(ValueOf(r, "pass2", mode, "ate_rmse_m"), "{:.4f}"));
+        row.push_back(Cell(100 * ValueOf(r, "pass2", mode, "localized_share").median, "{:.1f}%"));
+      }
+    }
+    if (has_plain && has_mutual) {
+      for (const std::string pass : {"pass1", "pass2"}) {
+        if (pass == std::string("pass2") && !two_pass) continue;
+        row.push_back(Cell(ValueOf(r, pass, "mutual", "ate_rmse_m").median / ValueOf(r, pass, "plain", "ate_rmse_m").median,
+                           "{:.2f}"));
+      }
+    }
+    if (has_mutual) {
+      row.push_back(Cell(100 * ValueOf(r, "pass1", "mutual", "seg_raw_miou").median, "{:.1f}") + " -> " +
+                    Cell(100 * ValueOf(r, "pass1", "mutual", "seg_refined_miou").median, "{:.1f}"));
+    }
+    table.rows.push_back(row);
+    merged["points"].push_back({{"assignments", grid.PointAssignments(p)},
+                                {"folder", "points/" + grid.PointName(p)},
+                                {"code_version", r.value("code_version", "")},
+                                {"summary", r.value("summary", nlohmann::json::object())}});
+  }
+
+  // The plots: against the first axis; other axes' values become more series.
+  std::vector<PlotSpec> plots = {{"sweep_ate_pass1.png", "pass1", "ate_rmse_m", "ATE, pass 1", "ATE RMSE [m]", {}}};
+  if (two_pass) {
+    plots.push_back({"sweep_ate_pass2.png", "pass2", "ate_rmse_m", "ATE, pass 2 on the pass-1 map", "ATE RMSE [m]", {}});
+    plots.push_back({"sweep_localized_pass2.png", "pass2", "localized_share", "Relocalization: pass-2 frames localized",
+                     "share of frames", {}});
+  }
+  if (has_mutual) {
+    plots.push_back({"sweep_miou_pass1.png", "pass1", "seg_refined_miou", "Segmentation in the loop (mutual), pass 1",
+                     "mIoU", {"mutual"}});
+  }
+  ReportDocument document("segslam sweep: " + results.front().value("scenario", std::string("?")));
+  document.AddMetadata("scenario file", results.front().value("scenario_file", std::string("?")));
+  document.AddMetadata("grid", [&] {
+    std::vector<std::string> parts;
+    for (const SweepAxis& axis : grid.axes) parts.push_back(axis.key + " = " + Join(axis.values, ", "));
+    return parts.empty() ? std::string("one point") : Join(parts, "; ");
+  }());
+  if (!grid.fixed_overrides.empty()) document.AddMetadata("fixed overrides", Join(grid.fixed_overrides, " "));
+  std::set<std::string> versions;
+  for (const nlohmann::json& r : results) versions.insert(r.value("code_version", std::string("?")));
+  document.AddMetadata("code version", Join({versions.begin(), versions.end()}, ", "));
+  const nlohmann::json machine = results.front().value("machine", nlohmann::json());
+  if (machine.is_object()) {
+    document.AddMetadata("machine", fmt::format("{}, {}, {} cores", machine.value("hostname", std::string("?")),
+                                                machine.value("cpu_model", std::string("?")),
+                                                machine.value("cores", 0u)));
+  }
+  const nlohmann::json bench = results.front().value("bench", nlohmann::json::object());
+  document.AddMetadata("bench", fmt::format("{} repeat(s) per mode, segmenter {}, seeds from {}",
+                                            bench.value("repeats", 0), bench.value("segmenter", std::string("?")),
+                                            bench.value("seed", 0)));
+  document.AddHeading("Results per point", 2);
+  document.AddTable(table);
+  document.AddParagraph("Each point's own report (tables, trajectories) is in points/<point>/report.html.");
+
+  if (!grid.axes.empty()) {
+    document.AddHeading("Against " + grid.axes.front().key, 2);
+    bool numeric = true;
+    const std::vector<double> x = AxisCoordinates(grid.axes.front(), &numeric);
+    const int per_value = points / static_cast<int>(grid.axes.front().values.size());
+    fs::create_directories(out_dir / "figures");
+    for (const PlotSpec& spec : plots) {
+      std::vector<PlotSeries> series;
+      const std::vector<std::string>& plot_modes = spec.modes.empty() ? modes : spec.modes;
+      for (const std::string& mode : plot_modes) {
+        for (int rest = 0; rest < per_value; ++rest) {
+          PlotSeries s;
+          s.name = mode;
+          if (per_value > 1) {
+            const std::vector<std::string> assignments = grid.PointAssignments(rest);
+            s.name += " (" + Join({assignments.begin() + 1, assignments.end()}, ", ") + ")";
+          }
+          for (std::size_t v = 0; v < x.size(); ++v) {
+            const PointValue value = ValueOf(results[static_cast<int>(v) * per_value + rest], spec.pass, mode, spec.metric);
+            s.y.push_back(value.median);
+            s.y_min.push_back(value.min);
+            s.y_max.push_back(value.max);
+          }
+          series.push_back(s);
+        }
+      }
+      LinePlotOptions options;
+      options.title = spec.title;
+      options.x_label = grid.axes.front().key + (numeric ? "" : " (" + Join(grid.axes.front().values, ", ") + ")");
+      options.y_label = spec.y_label;
+      WriteFigure(out_dir / "figures" / spec.file, DrawLinePlot(options, x, series).image);
+      document.AddImage("figures/" + spec.file, spec.title + " against " + grid.axes.front().key +
+                                                    " (median over repeats, bars from min to max)");
+    }
+  }
+  WriteFileAtomically(out_dir / "sweep_results.json", merged.dump(2) + "\n");
+  document.Write(out_dir);
+
+  std::ostringstream text;
+  text << Join(table.header, " | ") << "\n";
+  for (const auto& row : table.rows) text << Join(row, " | ") << "\n";
+  return text.str();
+}
+
+}  // namespace segslam::harness

@@ -1,0 +1,62 @@
+// A sweep: one scenario run (harness/scenario_runner.h) per point of a grid over scenario
+// parameters, e.g. the density of dynamic objects, and a table and plots of ATE,
+// relocalization and segmentation against the parameter, per mode.
+//
+// Each point is an independent job keyed by its assignments ("city.moving_cars=8"): it
+// writes OUT/points/<key>/ (a whole scenario report, results.json included), so a sweep
+// can be split over machines with --shard i/n (point p, counted from 0 in grid order,
+// belongs to shard p % n + 1) and merged from the shards' folders afterwards. A point
+// whose results.json exists with the same assignments and code version is not run again,
+// so an interrupted sweep resumes where it stopped.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace segslam::harness {
+
+// One swept key and its values, from "--set key=v1,v2,v3". A value that starts with '['
+// (a vector such as [0,0.5,0]) is one value.
+struct SweepAxis {
+  std::string key;
+  std::vector<std::string> values;
+};
+
+// The grid: every --set with more than one value is an axis (the first varies slowest);
+// the others are fixed overrides applied to every point.
+struct SweepGrid {
+  std::vector<SweepAxis> axes;
+  std::vector<std::string> fixed_overrides;  // KEY=VALUE
+
+  // Throws segslam::Error on a --set without '=' or with an empty value.
+  static SweepGrid FromSetOptions(const std::vector<std::string>& set_options);
+  int PointCount() const;
+  // The assignments of point `index` (0-based, grid order): one KEY=VALUE per axis.
+  std::vector<std::string> PointAssignments(int index) const;
+  // A folder name for the point: its assignments, '__'-joined, other characters than
+  // [A-Za-z0-9._=-] replaced by '_'.
+  std::string PointName(int index) const;
+  nlohmann::json ToJson() const;
+  static SweepGrid FromJson(const nlohmann::json& json, const std::string& origin);
+};
+
+// "i/n" with 1 <= i <= n; throws segslam::Error naming the text otherwise.
+struct Shard {
+  int index = 1;
+  int count = 1;
+  static Shard Parse(const std::string& text);
+  bool Owns(int point) const { return point % count + 1 == index; }
+};
+
+// The merged sweep: reads OUT/sweep.json (the grid) from `inputs[0]` and every point's
+// results.json from whichever of `inputs` holds it, copies point results into `out_dir`
+// when they come from elsewhere, and writes out_dir/sweep_results.json, report.md,
+// report.html and figures/sweep_*.png. Throws segslam::Error naming the missing points
+// when a point has no results in any input, or when the inputs hold different grids.
+// Returns a short summary table as text for the terminal.
+std::string MergeSweep(const std::vector<std::filesystem::path>& inputs, const std::filesystem::path& out_dir);
+
+}  // namespace segslam::harness

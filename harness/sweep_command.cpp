@@ -1,0 +1,178 @@
+// `segslam sweep SCENARIO --set key=v1,v2,...`: a scenario run per grid point
+// (harness/sweep.h), then the merged table and plots; `segslam sweep merge` joins the
+// folders of a sweep split with --shard.
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <iterator>
+#include <memory>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "harness/commands.h"
+#include "harness/scenario_runner.h"
+#include "harness/sweep.h"
+#include "scenes/scenario.h"
+
+namespace segslam::harness {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct SweepArgs {
+  ScenarioRunRequest run;  // the scenario file, modes, repeats, ... shared by every point
+  std::vector<std::string> set_options;
+  std::string out_dir;
+  std::string shard = "1/1";
+};
+
+struct SweepMergeArgs {
+  std::vector<std::string> inputs;
+  std::string out_dir;
+};
+
+// True when the point's folder already holds the results of this grid point from this
+// code version (an interrupted or re-submitted sweep does not redo it).
+bool PointIsDone(const fs::path& point_dir, const std::vector<std::string>& overrides) {
+  const fs::path file = point_dir / "results.json";
+  if (!fs::exists(file)) return false;
+  try {
+    std::ifstream in(file);
+    const nlohmann::json results = nlohmann::json::parse(in);
+    return results.value("overrides", std::vector<std::string>{}) == overrides &&
+           results.value("code_version", std::string()) == SEGSLAM_VERSION;
+  } catch (const std::exception&) {
+    return false;  // unreadable: run the point again
+  }
+}
+
+int RunSweep(const SweepArgs& args) {
+  const auto start = std::chrono::steady_clock::now();
+  const SweepGrid grid = SweepGrid::FromSetOptions(args.set_options);
+  const Shard shard = Shard::Parse(args.shard);
+  // The scenario and every point's overrides are checked before the first run.
+  const scenes::Scenario base = scenes::LoadScenario(args.run.scenario_file);
+  const int points = grid.PointCount();
+  for (int p = 0; p < points; ++p) {
+    scenes::Scenario scenario = base;
+    std::vector<std::string> overrides = grid.fixed_overrides;
+    for (const std::string& assignment : grid.PointAssignments(p)) overrides.push_back(assignment);
+    for (const std::string& assignment : overrides) {
+      const std::size_t equals = assignment.find('=');
+      scenes::ApplyOverride(scenario, assignment.substr(0, equals), assignment.substr(equals + 1));
+    }
+  }
+  const fs::path out_dir = args.out_dir.empty() ? fs::path("reports") / (base.name + "-sweep") : fs::path(args.out_dir);
+  fs::create_directories(out_dir);
+  const nlohmann::json sweep = {{"scenario_file", args.run.scenario_file}, {"grid", grid.ToJson()}};
+  const fs::path sweep_file = out_dir / "sweep.json";
+  if (fs::exists(sweep_file)) {
+    std::ifstream in(sweep_file);
+    nlohmann::json existing;
+    try {
+      existing = nlohmann::json::parse(in);
+    } catch (const std::exception&) {
+    }
+    if (existing.value("grid", nlohmann::json()) != sweep["grid"]) {
+      throw Error("sweep: " + out_dir.string() + " holds another sweep (sweep.json differs); choose another --out");
+    }
+  }
+  WriteFileAtomically(sweep_file, sweep.dump(2) + "\n");
+
+  int mine = 0;
+  for (int p = 0; p < points; ++p) mine += shard.Owns(p) ? 1 : 0;
+  fmt::print("segslam sweep: {} points ({}), shard {}/{} runs {} of them, into {}\n", points,
+             grid.axes.empty() ? std::string("no axis") : fmt::format("{} axes", grid.axes.size()), shard.index,
+             shard.count, mine, out_dir.string());
+  int done = 0;
+  for (int p = 0; p < points; ++p) {
+    if (!shard.Owns(p)) continue;
+    ++done;
+    ScenarioRunRequest request = args.run;
+    request.overrides = grid.fixed_overrides;
+    for (const std::string& assignment : grid.PointAssignments(p)) request.overrides.push_back(assignment);
+    request.out_dir = (out_dir / "points" / grid.PointName(p)).string();
+    request.progress_prefix = fmt::format("[point {}/{}] ", done, mine);
+    request.junit_file.clear();
+    if (PointIsDone(request.out_dir, request.overrides)) {
+      fmt::print("[point {}/{}] {}: done before, kept\n", done, mine, grid.PointName(p));
+      continue;
+    }
+    fmt::print("[point {}/{}] {}\n", done, mine, grid.PointName(p));
+    std::fflush(stdout);
+    const ScenarioReport report = RunScenarioToReport(request);
+    int passed = 0;
+    for (const ExpectationResult& check : report.checks) passed += check.passed ? 1 : 0;
+    fmt::print("[point {}/{}] {}: {} runs in {:.1f} s, {} of {} expectations passed\n", done, mine,
+               grid.PointName(p), report.runs.size(), report.seconds, passed, report.checks.size());
+    std::fflush(stdout);
+  }
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (shard.count > 1) {
+    fmt::print("sweep shard {}/{}: {} points in {:.1f} s; when every shard is done: segslam sweep merge {} ...\n",
+               shard.index, shard.count, mine, seconds, out_dir.string());
+    return 0;
+  }
+  fmt::print("\n{}", MergeSweep({out_dir}, out_dir));
+  fmt::print("sweep: {} points in {:.1f} s, report in {}\n", points, seconds, (out_dir / "report.html").string());
+  return 0;
+}
+
+int RunSweepMerge(const SweepMergeArgs& args) {
+  std::vector<fs::path> inputs(args.inputs.begin(), args.inputs.end());
+  const fs::path out_dir = args.out_dir.empty() ? inputs.front() : fs::path(args.out_dir);
+  if (out_dir != inputs.front()) {
+    fs::create_directories(out_dir);
+    std::ifstream in(inputs.front() / "sweep.json");
+    if (!in) throw Error("sweep merge: " + (inputs.front() / "sweep.json").string() + ": cannot be read");
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    WriteFileAtomically(out_dir / "sweep.json", text);
+  }
+  fmt::print("{}", MergeSweep(inputs, out_dir));
+  fmt::print("sweep merge: report in {}\n", (out_dir / "report.html").string());
+  return 0;
+}
+
+}  // namespace
+
+void AddSweepCommand(CLI::App& app, std::function<int()>* action) {
+  auto args = std::make_shared<SweepArgs>();
+  auto merge_args = std::make_shared<SweepMergeArgs>();
+  CLI::App* sweep = app.add_subcommand(
+      "sweep",
+      "A scenario run per point of a parameter grid (--set key=v1,v2,...), then a table and plots of ATE, "
+      "relocalization and mIoU against the parameter, per mode");
+  sweep->add_option("scenario", args->run.scenario_file, "Scenario YAML file");
+  sweep->add_option("--set", args->set_options,
+                    "KEY=V1,V2,... sweeps KEY over the values; KEY=VALUE fixes it (repeatable; several lists make a "
+                    "grid)");
+  sweep->add_option("--out,-o", args->out_dir, "Sweep folder (default reports/<scenario name>-sweep)");
+  sweep->add_option("--shard", args->shard, "Run only shard I of N (I/N): point p belongs to shard p % N + 1")
+      ->capture_default_str();
+  sweep->add_option("--repeats", args->run.repeats, "Runs per mode and point (default: the scenario's bench.repeats)")
+      ->check(CLI::PositiveNumber);
+  sweep->add_option("--modes", args->run.modes, "Comma-separated modes (default: the scenario's bench.modes)");
+  sweep->add_option("--segmenter", args->run.segmenter, "Simulated segmenter preset, or gt");
+  sweep->add_option("--frames", args->run.frames, "Only the first N frames per pass (0 = all)")
+      ->check(CLI::NonNegativeNumber);
+  sweep->add_option("--cache", args->run.cache_dir, "Folder of cached datasets")->capture_default_str();
+  sweep->add_option("--gl", args->run.gl, "Off-screen GL back-end for generation: osmesa or egl")->capture_default_str();
+  sweep->add_flag("-q,--quiet", args->run.quiet, "No progress bars");
+
+  CLI::App* merge = sweep->add_subcommand("merge", "Join the folders of a sweep run in shards into one report");
+  merge->add_option("folders", merge_args->inputs, "The shards' sweep folders (the first one's sweep.json is the grid)")
+      ->required();
+  merge->add_option("--out,-o", merge_args->out_dir, "Where the merged report goes (default: the first folder)");
+  merge->callback([merge_args, action] { *action = [merge_args] { return RunSweepMerge(*merge_args); }; });
+
+  sweep->callback([sweep, args, action] {
+    if (sweep->got_subcommand("merge")) return;
+    if (args->run.scenario_file.empty()) throw CLI::RequiredError("scenario");
+    *action = [args] { return RunSweep(*args); };
+  });
+}
+
+}  // namespace segslam::harness

@@ -1,0 +1,148 @@
+// The sweep's grid, shards and merge (harness/sweep.h), and `segslam sweep` end to end on
+// a tiny office: two shards merged give the same table as one run, and bad input is one
+// line.
+#include "harness/sweep.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <string>
+
+#include "core/error.h"
+#include "tests/harness/cli_runner.h"
+
+namespace segslam::harness {
+namespace {
+
+namespace fs = std::filesystem;
+using segslam::testing::CommandOutput;
+using segslam::testing::LineCount;
+using segslam::testing::ReadText;
+
+TEST(SweepGridTest, ListsBecomeAxesAndSingleValuesFixedOverrides) {
+  const SweepGrid grid = SweepGrid::FromSetOptions(
+      {"city.moving_cars=0,4,8", "city.pedestrians=10", "pass2.camera_offset_m=[0,0.5,0]", "city.crossing_share=0.1,0.5"});
+  ASSERT_EQ(grid.axes.size(), 2u);
+  EXPECT_EQ(grid.axes[0].key, "city.moving_cars");
+  EXPECT_EQ(grid.axes[0].values, (std::vector<std::string>{"0", "4", "8"}));
+  EXPECT_EQ(grid.fixed_overrides,
+            (std::vector<std::string>{"city.pedestrians=10", "pass2.camera_offset_m=[0,0.5,0]"}));
+  ASSERT_EQ(grid.PointCount(), 6);
+  // The first axis varies slowest.
+  EXPECT_EQ(grid.PointAssignments(0), (std::vector<std::string>{"city.moving_cars=0", "city.crossing_share=0.1"}));
+  EXPECT_EQ(grid.PointAssignments(1), (std::vector<std::string>{"city.moving_cars=0", "city.crossing_share=0.5"}));
+  EXPECT_EQ(grid.PointAssignments(5), (std::vector<std::string>{"city.moving_cars=8", "city.crossing_share=0.5"}));
+  EXPECT_EQ(grid.PointName(5), "city.moving_cars=8__city.crossing_share=0.5");
+  std::set<std::string> names;
+  for (int p = 0; p < grid.PointCount(); ++p) names.insert(grid.PointName(p));
+  EXPECT_EQ(names.size(), 6u);
+  // The grid survives its JSON form.
+  const SweepGrid again = SweepGrid::FromJson(grid.ToJson(), "test");
+  EXPECT_EQ(again.ToJson(), grid.ToJson());
+}
+
+TEST(SweepGridTest, MalformedSetIsAnErrorNamingIt) {
+  EXPECT_THROW(SweepGrid::FromSetOptions({"city.moving_cars"}), Error);
+  EXPECT_THROW(SweepGrid::FromSetOptions({"city.moving_cars="}), Error);
+  EXPECT_THROW(SweepGrid::FromSetOptions({"city.moving_cars=0,,8"}), Error);
+  try {
+    SweepGrid::FromSetOptions({"=4"});
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("sweep --set =4"), std::string::npos) << e.what();
+  }
+}
+
+TEST(SweepShardTest, ShardsCoverEveryPointExactlyOnce) {
+  for (int n = 1; n <= 4; ++n) {
+    for (int p = 0; p < 11; ++p) {
+      int owners = 0;
+      for (int i = 1; i <= n; ++i) owners += Shard::Parse(std::to_string(i) + "/" + std::to_string(n)).Owns(p) ? 1 : 0;
+      EXPECT_EQ(owners, 1) << "point " << p << " of " << n << " shards";
+    }
+  }
+  for (const char* bad : {"0/2", "3/2", "1/0", "1-2", "a/b", "1/2x"}) EXPECT_THROW(Shard::Parse(bad), Error) << bad;
+}
+
+class SweepCliTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("segslam_sweep_" + std::to_string(::getpid()) + "_" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  CommandOutput Run(const std::string& arguments) { return segslam::testing::RunSegslam(arguments, dir_); }
+  fs::path dir_;
+};
+
+const std::string kSmallOffice = (fs::path(SEGSLAM_SOURCE_DIR) / "scenarios" / "test" / "office_small.yaml").string();
+
+TEST_F(SweepCliTest, ShardsMergedEqualOneRun) {
+  const std::string common = kSmallOffice + " --set office.people_walking=0,2 --set office.people_sitting=1 --frames 12 " +
+                             "--repeats 1 --modes plain,mutual --segmenter gt -q --cache " + (dir_ / "cache").string();
+  const CommandOutput whole = Run("sweep " + common + " --out " + (dir_ / "whole").string());
+  ASSERT_EQ(whole.exit_code, 0) << whole.stderr_text;
+  for (const char* file : {"sweep.json", "sweep_results.json", "report.md", "report.html", "figures/sweep_ate_pass1.png",
+                           "figures/sweep_localized_pass2.png", "points/office.people_walking=0/results.json",
+                           "points/office.people_walking=2/results.json"}) {
+    EXPECT_TRUE(fs::exists(dir_ / "whole" / file)) << file;
+  }
+  const std::string table = ReadText(dir_ / "whole" / "report.md");
+  EXPECT_NE(table.find("| office.people\\_walking |"), std::string::npos) << table;  // Markdown escapes '_'
+  EXPECT_NE(table.find("![ATE, pass 1 against"), std::string::npos) << table;
+
+  for (const char* shard : {"1/2", "2/2"}) {
+    const CommandOutput part = Run("sweep " + common + " --shard " + shard + " --out " +
+                                   (dir_ / ("shard" + std::string(1, shard[0]))).string());
+    ASSERT_EQ(part.exit_code, 0) << part.stderr_text;
+  }
+  // A shard alone does not merge: it holds one of the two points.
+  EXPECT_FALSE(fs::exists(dir_ / "shard1" / "report.md"));
+  EXPECT_TRUE(fs::exists(dir_ / "shard1" / "points" / "office.people_walking=0" / "results.json"));
+  EXPECT_FALSE(fs::exists(dir_ / "shard1" / "points" / "office.people_walking=2" / "results.json"));
+
+  // Merging one shard is refused, naming the missing point.
+  const CommandOutput incomplete = Run("sweep merge " + (dir_ / "shard1").string());
+  EXPECT_EQ(incomplete.exit_code, 1);
+  EXPECT_EQ(LineCount(incomplete.stderr_text), 1) << incomplete.stderr_text;
+  EXPECT_NE(incomplete.stderr_text.find("office.people_walking=2"), std::string::npos) << incomplete.stderr_text;
+
+  const CommandOutput merged = Run("sweep merge " + (dir_ / "shard1").string() + " " + (dir_ / "shard2").string() +
+                                   " --out " + (dir_ / "merged").string());
+  ASSERT_EQ(merged.exit_code, 0) << merged.stderr_text;
+  const nlohmann::json a = nlohmann::json::parse(ReadText(dir_ / "whole" / "sweep_results.json"));
+  const nlohmann::json b = nlohmann::json::parse(ReadText(dir_ / "merged" / "sweep_results.json"));
+  ASSERT_EQ(a["points"].size(), 2u);
+  for (std::size_t p = 0; p < 2; ++p) {
+    EXPECT_EQ(a["points"][p]["assignments"], b["points"][p]["assignments"]);
+    // SLAM with ground-truth masks is deterministic: the same numbers either way.
+    EXPECT_EQ(a["points"][p]["summary"], b["points"][p]["summary"]);
+  }
+
+  // Run again: every point is kept, nothing is recomputed.
+  const CommandOutput again = Run("sweep " + common + " --out " + (dir_ / "whole").string());
+  ASSERT_EQ(again.exit_code, 0) << again.stderr_text;
+  EXPECT_NE(again.stdout_text.find("done before, kept"), std::string::npos) << again.stdout_text;
+}
+
+TEST_F(SweepCliTest, BadInputIsOneLineBeforeAnyWork) {
+  const std::string out = " --out " + (dir_ / "out").string() + " --cache " + (dir_ / "cache").string() + " -q";
+  for (const std::string& arguments :
+       {"sweep " + kSmallOffice + " --set office.people_walking" + out,
+        "sweep " + kSmallOffice + " --set office.walkers=1,2" + out,
+        "sweep " + kSmallOffice + " --set office.people_walking=1,-3" + out,
+        "sweep " + kSmallOffice + " --set office.people_walking=1,2 --shard 3/2" + out}) {
+    const CommandOutput result = Run(arguments);
+    EXPECT_EQ(result.exit_code, 1) << arguments;
+    EXPECT_EQ(LineCount(result.stderr_text), 1) << arguments << "\n" << result.stderr_text;
+    EXPECT_FALSE(fs::exists(dir_ / "cache")) << arguments;
+  }
+}
+
+}  // namespace
+}  // namespace segslam::harness
