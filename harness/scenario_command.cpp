@@ -230,6 +230,7 @@ int RunScenario(const ScenarioRunArgs& args) {
   const ScenarioReport report = RunScenarioToReport(args);
   const std::string& scenario_name = report.scenario_name;
   const fs::path& report_dir = report.report_dir;
+  fmt::print("{}", report.ToText());
   int failed = 0;
   if (!report.checks.empty()) fmt::print("\nexpectations (medians over repeats):\n");
   for (const ExpectationResult& check : report.checks) {

@@ -500,6 +500,29 @@ ReportDocument ScenarioReport::ToDocument() const {
 
 std::string ScenarioReport::ToMarkdown() const { return ToDocument().ToMarkdown(); }
 
+std::string ScenarioReport::ToText() const {
+  std::string text;
+  for (const Table& table : ReportTables(*this)) {
+    std::vector<std::size_t> widths(table.header.size(), 0);
+    for (std::size_t c = 0; c < table.header.size(); ++c) widths[c] = table.header[c].size();
+    for (const auto& row : table.rows) {
+      for (std::size_t c = 0; c < row.size() && c < widths.size(); ++c) widths[c] = std::max(widths[c], row[c].size());
+    }
+    auto line = [&](const std::vector<std::string>& cells) {
+      std::string out;
+      for (std::size_t c = 0; c < cells.size() && c < widths.size(); ++c) {
+        // The first column names the row; numbers read best right-aligned.
+        out += c == 0 ? fmt::format("{:<{}}", cells[c], widths[c]) : fmt::format("  {:>{}}", cells[c], widths[c]);
+      }
+      return out + "\n";
+    };
+    text += "\n" + table.title + "\n" + line(table.header);
+    for (const auto& row : table.rows) text += line(row);
+    if (!table.note.empty()) text += "(" + table.note + ")\n";
+  }
+  return text;
+}
+
 std::string ScenarioReport::ToHtml() const { return ToDocument().ToHtml(); }
 
 std::vector<std::string> DrawReportFigures(const ScenarioReport& report) {

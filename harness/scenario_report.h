@@ -126,6 +126,8 @@ struct ScenarioReport {
   // The tables (and the figures present in report_dir) as one document.
   ReportDocument ToDocument() const;
   std::string ToMarkdown() const;
+  // The report's tables as aligned plain text, for the terminal.
+  std::string ToText() const;
   std::string ToHtml() const;
   // One testcase per expectation.
   std::string ToJUnitXml() const;

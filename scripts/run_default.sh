@@ -1,11 +1,23 @@
 #!/usr/bin/env bash
 # README command 1: install dependencies, build, and run the main job on the default
-# scenario (scenarios/city_two_pass.yaml): generate both passes, then run the paper's
-# framework on them (pass 1 builds the long-term map, pass 2 relocalizes on it) with the
-# simulated FCIS-like segmenter, and print the table.
+# scenario (scenarios/city_two_pass.yaml): generate both passes (cached in data/cache/),
+# run plain, mask-moveable and the paper's mutual loop with the simulated FCIS-like
+# segmenter over them (pass 1 builds the long-term map, pass 2 relocalizes on it),
+# print the paper-style tables and the scenario's thresholds, and write the report to
+# reports/city_two_pass/ (report.html, report.md, results.json).
+#
+# Three repeats per mode keep this near a quarter of an hour on two cores; the paper's
+# ten: ./build/segslam scenario run scenarios/city_two_pass.yaml
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install_deps.sh
 bash scripts/build.sh
-./build/segslam generate scenarios/city_two_pass.yaml --out data/city_two_pass --force
-./build/segslam run data/city_two_pass --mode mutual --segmenter fcis-like
+status=0
+./build/segslam scenario run scenarios/city_two_pass.yaml --repeats 3 || status=$?
+# Exit code 2 means the job ran and a threshold of the scenario failed: a result shown
+# above, not a broken set-up.
+if [ "$status" -eq 2 ]; then
+  echo "run_default: the job ran; some of the scenario's thresholds failed (see the table above)"
+  exit 0
+fi
+exit "$status"
