@@ -57,10 +57,9 @@ TEST_F(ScenarioCliTest, UnknownMetricFailsBeforeAnyWork) {
   EXPECT_FALSE(fs::exists(dir_ / "cache"));
   EXPECT_FALSE(fs::exists(dir_ / "report"));
 
-  // A mode that does not run is as unknown as a metric.
-  const fs::path other = WriteScenario("other", "expect:\n  mask-moveable.ate_rmse_m: {max: 0.05}\n");
-  const CommandOutput modes = Run("scenario run " + other.string() + " --modes plain,mutual --cache " +
-                                  (dir_ / "cache").string() + " -q");
+  // A mode that the scenario never runs is as unknown as a metric.
+  const fs::path other = WriteScenario("other", "bench: {modes: [plain, mutual]}\nexpect:\n  mask-moveable.ate_rmse_m: {max: 0.05}\n");
+  const CommandOutput modes = Run("scenario run " + other.string() + " --cache " + (dir_ / "cache").string() + " -q");
   EXPECT_EQ(modes.exit_code, 1);
   EXPECT_NE(modes.stderr_text.find("mode 'mask-moveable' does not run"), std::string::npos) << modes.stderr_text;
   EXPECT_FALSE(fs::exists(dir_ / "cache"));
@@ -124,6 +123,14 @@ TEST_F(ScenarioCliTest, TinyRunWritesTheReportAndItsExitCodeFollowsTheThresholds
   const std::string failed_xml = ReadText(junit);
   EXPECT_EQ(Count(failed_xml, "<testcase "), 2) << failed_xml;
   EXPECT_EQ(Count(failed_xml, "<failure"), 1) << failed_xml;
+
+  // --modes leaving mutual out: its threshold is not checked (and says so), the rest is.
+  const CommandOutput narrowed = Run("scenario run " + failing.string() + " --frames 25 --modes plain -q --cache " +
+                                     cache + " --out " + (dir_ / "report3").string());
+  EXPECT_EQ(narrowed.exit_code, 0) << narrowed.stdout_text << narrowed.stderr_text;
+  EXPECT_NE(narrowed.stdout_text.find("expectation mutual.ate_rmse_m not checked"), std::string::npos)
+      << narrowed.stdout_text;
+  EXPECT_NE(narrowed.stdout_text.find("1 of 1 expectations passed"), std::string::npos) << narrowed.stdout_text;
 }
 
 }  // namespace

@@ -144,5 +144,40 @@ TEST_F(SweepCliTest, BadInputIsOneLineBeforeAnyWork) {
   }
 }
 
+// `segslam scenario suite`: entries joined into the paper's tables, and a bad suite file
+// refused in one line before any work.
+TEST_F(SweepCliTest, SuiteJoinsItsEntriesIntoThePapersTables) {
+  const fs::path suite = dir_ / "tiny_suite.yaml";
+  std::ofstream(suite) << "name: tiny\nentries:\n"
+                       << "  - {name: office_a, scenario: " << kSmallOffice << ", tables: [ate, segmentation]}\n"
+                       << "  - {name: office_b, scenario: " << kSmallOffice << ", set: [seed=9], tables: [relocalization]}\n";
+  const CommandOutput result = Run("scenario suite " + suite.string() + " --frames 10 --repeats 1 --modes plain,mutual -q" +
+                                   " --cache " + (dir_ / "cache").string() + " --out " + (dir_ / "out").string());
+  ASSERT_EQ(result.exit_code, 0) << result.stdout_text << result.stderr_text;
+  for (const char* file : {"report.md", "report.html", "suite_results.json", "office_a/results.json",
+                           "office_b/results.json"}) {
+    EXPECT_TRUE(fs::exists(dir_ / "out" / file)) << file;
+  }
+  const std::string markdown = ReadText(dir_ / "out" / "report.md");
+  EXPECT_NE(markdown.find("Table I: ATE"), std::string::npos) << markdown;
+  EXPECT_NE(markdown.find("Table III: relocalization"), std::string::npos) << markdown;
+  // Each entry appears in the tables it asked for and no other.
+  EXPECT_NE(result.stdout_text.find("office_a pass1 |"), std::string::npos) << result.stdout_text;
+  EXPECT_EQ(result.stdout_text.find("office_b pass1 |"), std::string::npos) << result.stdout_text;
+  const nlohmann::json joined = nlohmann::json::parse(ReadText(dir_ / "out" / "suite_results.json"));
+  ASSERT_EQ(joined["entries"].size(), 2u);
+  EXPECT_EQ(joined["entries"][1]["overrides"], nlohmann::json::array({"seed=9"}));
+
+  const fs::path bad = dir_ / "bad_suite.yaml";
+  std::ofstream(bad) << "name: bad\nentries:\n"
+                     << "  - {name: a, scenario: " << kSmallOffice << ", tables: [ate, table9]}\n";
+  const CommandOutput refused = Run("scenario suite " + bad.string() + " -q --cache " + (dir_ / "cache2").string());
+  EXPECT_EQ(refused.exit_code, 1);
+  EXPECT_EQ(LineCount(refused.stderr_text), 1) << refused.stderr_text;
+  EXPECT_NE(refused.stderr_text.find("entries[0]: tables: unknown table 'table9'"), std::string::npos)
+      << refused.stderr_text;
+  EXPECT_FALSE(fs::exists(dir_ / "cache2"));
+}
+
 }  // namespace
 }  // namespace segslam::harness

@@ -1,0 +1,300 @@
+// `segslam scenario suite SUITE.yaml`: several scenario runs gathered into the paper's
+// tables (scenarios/suites/paper_tables.yaml: Table I, ATE on six TUM-like office sequences;
+// Tables II and IV, raw vs refined segmentation; Table III, relocalization on two-pass
+// city routes). Each entry is one `scenario run` (harness/scenario_runner.h) into
+// OUT/<entry>/; OUT/report.html, report.md and suite_results.json hold the joined tables.
+//
+// Suite file:
+//   name: paper_tables
+//   entries:
+//     - name: fr3_walking_xyz              # a row label, unique, [A-Za-z0-9._-]
+//       scenario: ../office_walking_xyz.yaml  # relative to the suite file's folder
+//       set: [office.frames=300]           # optional --set overrides
+//       tables: [ate, segmentation]        # which joined tables show this entry:
+//                                          # ate, segmentation, relocalization
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <set>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+#include <yaml-cpp/yaml.h>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "harness/commands.h"
+#include "harness/report_document.h"
+#include "harness/scenario_runner.h"
+#include "scenes/scenario.h"
+
+namespace segslam::harness {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::vector<std::string> kModeOrder = {"plain", "mask-moveable", "mutual"};
+const std::set<std::string> kTables = {"ate", "segmentation", "relocalization"};
+
+struct SuiteEntry {
+  std::string name;
+  fs::path scenario;
+  std::vector<std::string> overrides;
+  std::set<std::string> tables;
+};
+
+struct Suite {
+  std::string name;
+  std::vector<SuiteEntry> entries;
+};
+
+Suite LoadSuite(const fs::path& file) {
+  const std::string origin = file.string();
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(origin);
+  } catch (const YAML::Exception& e) {
+    throw Error(origin + ": " + e.what());
+  }
+  if (!root.IsMap()) throw Error(origin + ": a suite file is a map with name: and entries:");
+  for (const auto& key : root) {
+    const std::string k = key.first.as<std::string>();
+    if (k != "name" && k != "entries") throw Error(origin + ": unknown key '" + k + "' (known: name, entries)");
+  }
+  Suite suite;
+  suite.name = root["name"] ? root["name"].as<std::string>() : file.stem().string();
+  if (!root["entries"] || !root["entries"].IsSequence() || root["entries"].size() == 0) {
+    throw Error(origin + ": entries: a non-empty list is needed");
+  }
+  std::set<std::string> names;
+  for (std::size_t i = 0; i < root["entries"].size(); ++i) {
+    const YAML::Node node = root["entries"][i];
+    const std::string where = fmt::format("{}: entries[{}]", origin, i);
+    if (!node.IsMap()) throw Error(where + ": expected a map");
+    for (const auto& key : node) {
+      const std::string k = key.first.as<std::string>();
+      if (k != "name" && k != "scenario" && k != "set" && k != "tables") {
+        throw Error(where + ": unknown key '" + k + "' (known: name, scenario, set, tables)");
+      }
+    }
+    SuiteEntry entry;
+    if (!node["name"] || !node["scenario"]) throw Error(where + ": name: and scenario: are required");
+    entry.name = node["name"].as<std::string>();
+    const bool plain_name = !entry.name.empty() && std::all_of(entry.name.begin(), entry.name.end(), [](char c) {
+      return std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '_' || c == '-';
+    });
+    if (!plain_name) throw Error(where + ": name '" + entry.name + "' must be letters, digits, '.', '_' or '-'");
+    if (!names.insert(entry.name).second) throw Error(where + ": name '" + entry.name + "' is used twice");
+    entry.scenario = file.parent_path() / node["scenario"].as<std::string>();
+    if (!fs::exists(entry.scenario)) throw Error(where + ": scenario " + entry.scenario.string() + ": no such file");
+    if (node["set"]) {
+      if (!node["set"].IsSequence()) throw Error(where + ": set: expected a list of KEY=VALUE");
+      for (const auto& item : node["set"]) entry.overrides.push_back(item.as<std::string>());
+    }
+    if (!node["tables"] || !node["tables"].IsSequence()) {
+      throw Error(where + ": tables: expected a list of ate, segmentation, relocalization");
+    }
+    for (const auto& item : node["tables"]) {
+      const std::string table = item.as<std::string>();
+      if (!kTables.count(table)) {
+        throw Error(where + ": tables: unknown table '" + table + "' (known: ate, segmentation, relocalization)");
+      }
+      entry.tables.insert(table);
+    }
+    suite.entries.push_back(entry);
+  }
+  return suite;
+}
+
+struct SuiteArgs {
+  ScenarioRunRequest run;  // repeats, modes, frames, cache... shared by every entry
+  std::string suite_file;
+  std::string out_dir;
+};
+
+double Median(const nlohmann::json& results, const std::string& pass, const std::string& mode,
+              const std::string& metric, const char* which = "median") {
+  const nlohmann::json summary = results.value("summary", nlohmann::json::object());
+  if (!summary.contains(pass) || !summary[pass].contains(mode) || !summary[pass][mode].contains(metric)) return NAN;
+  const nlohmann::json& value = summary[pass][mode][metric][which];
+  return value.is_number() ? value.get<double>() : NAN;
+}
+
+std::string Cell(double value, const char* format, double scale = 1) {
+  return std::isnan(value) ? std::string("n/a") : fmt::format(fmt::runtime(format), scale * value);
+}
+
+std::string WithSpread(const nlohmann::json& results, const std::string& pass, const std::string& mode,
+                       const std::string& metric, const char* format, double scale = 1) {
+  const double median = Median(results, pass, mode, metric);
+  const double low = Median(results, pass, mode, metric, "min"), high = Median(results, pass, mode, metric, "max");
+  if (std::isnan(median) || low == high) return Cell(median, format, scale);
+  return Cell(median, format, scale) + " [" + Cell(low, format, scale) + ", " + Cell(high, format, scale) + "]";
+}
+
+int RunSuite(const SuiteArgs& args) {
+  const auto start = std::chrono::steady_clock::now();
+  const Suite suite = LoadSuite(args.suite_file);
+  // Every entry's scenario and overrides are checked before the first run.
+  for (const SuiteEntry& entry : suite.entries) {
+    scenes::Scenario scenario = scenes::LoadScenario(entry.scenario);
+    for (const std::string& assignment : entry.overrides) {
+      const std::size_t equals = assignment.find('=');
+      if (equals == std::string::npos || equals == 0) {
+        throw Error(args.suite_file + ": entry " + entry.name + ": set: expected KEY=VALUE, got '" + assignment + "'");
+      }
+      scenes::ApplyOverride(scenario, assignment.substr(0, equals), assignment.substr(equals + 1));
+    }
+  }
+  const fs::path out_dir = args.out_dir.empty() ? fs::path("reports") / suite.name : fs::path(args.out_dir);
+  fmt::print("segslam scenario suite: {} ({} entries) into {}\n", suite.name, suite.entries.size(), out_dir.string());
+  std::vector<nlohmann::json> results;
+  int failed_checks = 0, checks = 0;
+  for (std::size_t i = 0; i < suite.entries.size(); ++i) {
+    const SuiteEntry& entry = suite.entries[i];
+    ScenarioRunRequest request = args.run;
+    request.scenario_file = entry.scenario.string();
+    request.overrides = entry.overrides;
+    request.out_dir = (out_dir / entry.name).string();
+    request.junit_file.clear();
+    request.progress_prefix = fmt::format("[{} {}/{}] ", entry.name, i + 1, suite.entries.size());
+    fmt::print("[{}/{}] {}: {}{}\n", i + 1, suite.entries.size(), entry.name, entry.scenario.string(),
+               entry.overrides.empty() ? "" : " --set " + fmt::format("{}", fmt::join(entry.overrides, " --set ")));
+    std::fflush(stdout);
+    const ScenarioReport report = RunScenarioToReport(request);
+    for (const ExpectationResult& check : report.checks) {
+      ++checks;
+      if (!check.passed) ++failed_checks;
+      fmt::print("  {}  {} {}\n", check.passed ? "PASS" : "FAIL", check.expectation.name.text,
+                 std::isnan(check.value) ? std::string("n/a") : fmt::format("{:.4g} {}", check.value, check.expectation.Bounds()));
+    }
+    results.push_back(report.ToJson());
+  }
+
+  std::vector<std::string> modes;
+  for (const std::string& mode : kModeOrder) {
+    for (const nlohmann::json& r : results) {
+      const auto ran = r["bench"]["modes"];
+      if (std::find(ran.begin(), ran.end(), mode) != ran.end()) {
+        modes.push_back(mode);
+        break;
+      }
+    }
+  }
+  const bool ratio = std::count(modes.begin(), modes.end(), "plain") && std::count(modes.begin(), modes.end(), "mutual");
+  ReportDocument document("segslam suite: " + suite.name);
+  document.AddMetadata("suite file", args.suite_file);
+  document.AddMetadata("code version", results.front().value("code_version", std::string("?")));
+  const nlohmann::json machine = results.front()["machine"];
+  document.AddMetadata("machine", fmt::format("{}, {}, {} cores", machine.value("hostname", std::string("?")),
+                                              machine.value("cpu_model", std::string("?")), machine.value("cores", 0u)));
+  const nlohmann::json bench = results.front()["bench"];
+  document.AddMetadata("bench", fmt::format("{} repeat(s) per mode, segmenter {}, seeds from {}; median [min, max]",
+                                            bench.value("repeats", 0), bench.value("segmenter", std::string("?")),
+                                            bench.value("seed", 0)));
+  std::string text;
+  auto add_table = [&](const std::string& title, ReportTable table) {
+    if (table.rows.empty()) return;
+    document.AddHeading(title, 2);
+    document.AddTable(table);
+    text += "\n" + title + "\n" + fmt::format("{}", fmt::join(table.header, " | ")) + "\n";
+    for (const auto& row : table.rows) text += fmt::format("{}", fmt::join(row, " | ")) + "\n";
+  };
+
+  ReportTable ate{"ATE RMSE [m], pass 1, aligned to the ground truth", {"sequence"}, {}};
+  for (const std::string& mode : modes) ate.header.push_back(mode);
+  if (ratio) ate.header.push_back("mutual / plain");
+  ReportTable seg{"Raw vs refined masks of the mutual loop (SLAM poses) [%]",
+                  {"sequence", "raw mAP", "raw AP50", "raw mIoU", "refined mAP", "refined AP50", "refined mIoU"}, {}};
+  ReportTable reloc{"Pass 2 on pass 1's long-term map, not re-aligned: localized share and ATE RMSE [m]",
+                    {"route"}, {}};
+  for (const std::string& mode : modes) {
+    reloc.header.push_back(mode + " localized");
+    reloc.header.push_back(mode + " ATE");
+  }
+  if (ratio) reloc.header.push_back("mutual / plain");
+  nlohmann::json joined = {{"suite", suite.name}, {"entries", nlohmann::json::array()}};
+  for (std::size_t i = 0; i < suite.entries.size(); ++i) {
+    const SuiteEntry& entry = suite.entries[i];
+    const nlohmann::json& r = results[i];
+    joined["entries"].push_back({{"name", entry.name},
+                                 {"scenario", entry.scenario.string()},
+                                 {"overrides", entry.overrides},
+                                 {"report", entry.name + "/report.html"},
+                                 {"summary", r["summary"]},
+                                 {"expectations", r["expectations"]}});
+    if (entry.tables.count("ate")) {
+      std::vector<std::string> row = {entry.name};
+      for (const std::string& mode : modes) row.push_back(WithSpread(r, "pass1", mode, "ate_rmse_m", "{:.4f}"));
+      if (ratio) {
+        row.push_back(Cell(Median(r, "pass1", "mutual", "ate_rmse_m") / Median(r, "pass1", "plain", "ate_rmse_m"), "{:.2f}"));
+      }
+      ate.rows.push_back(row);
+    }
+    if (entry.tables.count("segmentation")) {
+      for (const std::string pass : {"pass1", "pass2"}) {
+        std::vector<std::string> row = {entry.name + " " + pass};
+        for (const std::string kind : {"raw", "refined"}) {
+          for (const std::string metric : {"map", "ap50", "miou"}) {
+            row.push_back(WithSpread(r, pass, "mutual", "seg_" + kind + "_" + metric, "{:.1f}", 100));
+          }
+        }
+        seg.rows.push_back(row);
+      }
+    }
+    if (entry.tables.count("relocalization")) {
+      std::vector<std::string> row = {entry.name};
+      for (const std::string& mode : modes) {
+        row.push_back(Cell(Median(r, "pass2", mode, "localized_share"), "{:.1f}%", 100));
+        row.push_back(WithSpread(r, "pass2", mode, "ate_rmse_m", "{:.4f}"));
+      }
+      if (ratio) {
+        row.push_back(Cell(Median(r, "pass2", "mutual", "ate_rmse_m") / Median(r, "pass2", "plain", "ate_rmse_m"), "{:.2f}"));
+      }
+      reloc.rows.push_back(row);
+    }
+  }
+  add_table("Table I: ATE on TUM-like office sequences", ate);
+  add_table("Tables II and IV: segmentation in the loop", seg);
+  add_table("Table III: relocalization on two-pass city routes", reloc);
+  document.AddHeading("Entries", 2);
+  for (const SuiteEntry& entry : suite.entries) {
+    document.AddParagraph(entry.name + ": " + entry.name + "/report.html (every table, figures, each run)");
+  }
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  joined["seconds"] = seconds;
+  joined["checks"] = checks;
+  joined["failed_checks"] = failed_checks;
+  WriteFileAtomically(out_dir / "suite_results.json", joined.dump(2) + "\n");
+  document.Write(out_dir);
+  fmt::print("{}", text);
+  fmt::print("suite {}: {} entries, {} of {} expectations passed, {:.1f} s, report in {}\n", suite.name,
+             suite.entries.size(), checks - failed_checks, checks, seconds, (out_dir / "report.html").string());
+  return failed_checks == 0 ? 0 : 2;
+}
+
+}  // namespace
+
+void AddSuiteCommand(CLI::App& scenario, std::function<int()>* action) {
+  auto args = std::make_shared<SuiteArgs>();
+  CLI::App* suite = scenario.add_subcommand(
+      "suite",
+      "Run every entry of a suite file (e.g. scenarios/suites/paper_tables.yaml) as a scenario run and join them into the "
+      "paper's tables. Exit code 0: every threshold passes; 2: one fails; 1: an error");
+  suite->add_option("suite", args->suite_file, "Suite YAML file")->required();
+  suite->add_option("--out,-o", args->out_dir, "Report directory (default reports/<suite name>)");
+  suite->add_option("--repeats", args->run.repeats, "Runs per mode (default: each scenario's bench.repeats)")
+      ->check(CLI::PositiveNumber);
+  suite->add_option("--modes", args->run.modes, "Comma-separated modes (default: each scenario's bench.modes)");
+  suite->add_option("--segmenter", args->run.segmenter, "Simulated segmenter preset, or gt");
+  suite->add_option("--frames", args->run.frames, "Only the first N frames per pass (0 = all)")
+      ->check(CLI::NonNegativeNumber);
+  suite->add_option("--cache", args->run.cache_dir, "Folder of cached datasets")->capture_default_str();
+  suite->add_option("--gl", args->run.gl, "Off-screen GL back-end for generation: osmesa or egl")->capture_default_str();
+  suite->add_flag("-q,--quiet", args->run.quiet, "No progress bars");
+  suite->callback([args, action] { *action = [args] { return RunSuite(*args); }; });
+}
+
+}  // namespace segslam::harness
