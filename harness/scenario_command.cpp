@@ -9,7 +9,8 @@
 //                 seeds, code version and machine
 //   report.md, report.html  the tables in the layout of the paper's
 //   scenario.yaml           the effective scenario (every key, overrides applied)
-//   figures/                top views of both passes (the paper's Fig. 4)
+//   figures/                top views of both passes (the paper's Fig. 4), raw vs refined
+//                           masks (Fig. 5) and features kept vs dropped (Fig. 6)
 //   runs/<mode>/<seed>/     each run's outputs, as `segslam run` writes them
 // Exit code: 0 when every expectation passes, 2 when one fails, 1 on an error.
 #include <algorithm>

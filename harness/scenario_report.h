@@ -133,9 +133,12 @@ struct ScenarioReport {
   std::string ToJUnitXml() const;
 };
 
-// Draws the report's figures into report.report_dir/figures/ (top views of both passes,
-// as the paper's Fig. 4). A figure that cannot be drawn is skipped; the returned lines
-// say which and why.
+// Draws the report's figures into report.report_dir/figures/: top views of both passes
+// (as the paper's Fig. 4), and for one frame of pass 1 of the mutual run of median ATE
+// the raw vs refined masks (Fig. 5) and the features kept vs dropped (Fig. 6; this runs
+// that pass again with feature records, as they are not saved). A figure that cannot be
+// drawn (e.g. the mutual mode did not run) is skipped; the returned lines say which and
+// why.
 std::vector<std::string> DrawReportFigures(const ScenarioReport& report);
 
 }  // namespace segslam::harness

@@ -83,9 +83,11 @@ TEST_F(ScenarioCliTest, TinyRunWritesTheReportAndItsExitCodeFollowsTheThresholds
   ASSERT_EQ(pass.exit_code, 0) << pass.stdout_text << pass.stderr_text;
   EXPECT_NE(pass.stdout_text.find("3 of 3 expectations passed"), std::string::npos);
   for (const char* file : {"results.json", "report.md", "report.html", "figures/trajectories_pass1.png",
-                           "figures/trajectories_pass2.png"}) {
+                           "figures/trajectories_pass2.png", "figures/masks_raw_vs_refined.png",
+                           "figures/features_kept_vs_dropped.png"}) {
     EXPECT_TRUE(fs::exists(report / file)) << file;
   }
+  EXPECT_EQ(pass.stdout_text.find("figure not drawn"), std::string::npos) << pass.stdout_text;
 
   const nlohmann::json results = nlohmann::json::parse(ReadText(report / "results.json"));
   EXPECT_EQ(results["scenario"], "office_small");
@@ -102,7 +104,11 @@ TEST_F(ScenarioCliTest, TinyRunWritesTheReportAndItsExitCodeFollowsTheThresholds
   EXPECT_NE(markdown.find("per sequence and mode (as the paper's Table I)"), std::string::npos);
   EXPECT_NE(markdown.find("Relocalization in pass 2"), std::string::npos);
   EXPECT_NE(markdown.find("raw vs refined"), std::string::npos);
-  EXPECT_NE(markdown.find("figures/trajectories_pass2.png"), std::string::npos);
+  for (const char* figure : {"figures/trajectories_pass2.png", "figures/masks_raw_vs_refined.png",
+                             "figures/features_kept_vs_dropped.png"}) {
+    EXPECT_NE(markdown.find(figure), std::string::npos) << figure;
+    EXPECT_NE(ReadText(report / "report.html").find(figure), std::string::npos) << figure;
+  }
   const std::string xml = ReadText(junit);
   EXPECT_EQ(Count(xml, "<testcase "), 3) << xml;
   EXPECT_EQ(Count(xml, "<failure"), 0) << xml;
@@ -131,6 +137,12 @@ TEST_F(ScenarioCliTest, TinyRunWritesTheReportAndItsExitCodeFollowsTheThresholds
   EXPECT_NE(narrowed.stdout_text.find("expectation mutual.ate_rmse_m not checked"), std::string::npos)
       << narrowed.stdout_text;
   EXPECT_NE(narrowed.stdout_text.find("1 of 1 expectations passed"), std::string::npos) << narrowed.stdout_text;
+  // Without the mutual mode Figs. 5 and 6 cannot be drawn: said, not fatal, not shown.
+  EXPECT_NE(narrowed.stdout_text.find("figure not drawn: figures/masks_raw_vs_refined.png"), std::string::npos)
+      << narrowed.stdout_text;
+  EXPECT_NE(narrowed.stdout_text.find("figure not drawn: figures/features_kept_vs_dropped.png"), std::string::npos)
+      << narrowed.stdout_text;
+  EXPECT_EQ(ReadText(dir_ / "report3" / "report.md").find("features_kept_vs_dropped"), std::string::npos);
 }
 
 }  // namespace
