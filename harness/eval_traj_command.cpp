@@ -28,16 +28,6 @@ struct EvalTrajArgs {
   std::string json_file;
 };
 
-ErrorStatistics Scaled(ErrorStatistics s, double factor) {
-  s.rmse *= factor;
-  s.mean *= factor;
-  s.median *= factor;
-  s.std *= factor;
-  s.min *= factor;
-  s.max *= factor;
-  return s;
-}
-
 std::string TableRow(const std::string& metric, const ErrorStatistics& s) {
   return fmt::format("{:<22} {:>6} {:>9.6f} {:>9.6f} {:>9.6f} {:>9.6f} {:>9.6f} {:>9.6f}\n",
                      metric, s.count, s.rmse, s.mean, s.median, s.std, s.min, s.max);

@@ -99,16 +99,6 @@ MaskScores MaskScoresFromJson(const nlohmann::json& json) {
   return {NumberOrNaN(json, "mAP"), NumberOrNaN(json, "AP50"), NumberOrNaN(json, "mIoU")};
 }
 
-ErrorStatistics Scaled(ErrorStatistics s, double factor) {
-  s.rmse *= factor;
-  s.mean *= factor;
-  s.median *= factor;
-  s.std *= factor;
-  s.min *= factor;
-  s.max *= factor;
-  return s;
-}
-
 nlohmann::json StatisticsJson(const std::optional<ErrorStatistics>& s) {
   if (!s.has_value()) return nullptr;
   return {{"count", s->count}, {"rmse", s->rmse}, {"mean", s->mean}, {"median", s->median},

@@ -3,6 +3,7 @@
 // paper's Tables II and IV, with overlay pictures of the last frame (its Fig. 5).
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/option_assignment.h"
 #include "core/image_io.h"
 #include "core/instances.h"
 #include "core/tracks.h"
@@ -59,17 +60,9 @@ std::vector<fs::path> SequencesOf(const fs::path& dataset) {
 // Sets one refiner option from "name=value" (seg-eval --refiner, for tuning). Throws
 // segslam::Error on an unknown name or a malformed value.
 void SetRefinerOption(seg::RefinerOptions* o, const std::string& assignment) {
-  const size_t eq = assignment.find('=');
-  if (eq == std::string::npos) throw Error("seg-eval --refiner: expected NAME=VALUE, got " + assignment);
-  const std::string name = assignment.substr(0, eq), value = assignment.substr(eq + 1);
-  double x = 0;
-  try {
-    size_t used = 0;
-    x = std::stod(value, &used);
-    if (used != value.size()) throw std::invalid_argument(value);
-  } catch (const std::exception&) {
-    throw Error("seg-eval --refiner " + name + ": not a number: " + value);
-  }
+  const NumericAssignment parsed = ParseNumericAssignment(assignment, "seg-eval --refiner");
+  const std::string& name = parsed.name;
+  const double x = parsed.value;
   const std::map<std::string, double*> doubles = {
       {"w_barycenter", &o->w_barycenter},
       {"w_shape", &o->w_shape},

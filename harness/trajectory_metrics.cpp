@@ -72,6 +72,16 @@ double RotationAngle(const Eigen::Matrix3d& R) {
 
 }  // namespace
 
+ErrorStatistics Scaled(ErrorStatistics s, double factor) {
+  s.rmse *= factor;
+  s.mean *= factor;
+  s.median *= factor;
+  s.std *= factor;
+  s.min *= factor;
+  s.max *= factor;
+  return s;
+}
+
 ErrorStatistics ComputeErrorStatistics(const std::vector<double>& errors) {
   if (errors.empty()) throw Error("no errors to summarise");
   ErrorStatistics s;

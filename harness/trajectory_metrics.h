@@ -33,6 +33,9 @@ struct ErrorStatistics {
 // Throws segslam::Error for an empty list.
 ErrorStatistics ComputeErrorStatistics(const std::vector<double>& errors);
 
+// Every statistic multiplied by `factor` (e.g. radians to degrees); count unchanged.
+ErrorStatistics Scaled(ErrorStatistics statistics, double factor);
+
 // Indices into two stamp lists joined as associate.py does: every pair with
 // |first - (second + offset)| < max_difference is a candidate; candidates are taken in
 // order of increasing difference (ties by first, then second stamp), each stamp at most

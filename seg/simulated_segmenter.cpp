@@ -13,6 +13,7 @@
 #include "core/coco.h"
 #include "core/error.h"
 #include "core/image_io.h"
+#include "core/option_assignment.h"
 #include "core/tracks.h"
 
 namespace segslam::seg {
@@ -308,17 +309,10 @@ std::map<std::string, int*> IntFields(SimulatedSegmenterOptions* o) {
 }  // namespace
 
 void SimulatedSegmenterOptions::Set(const std::string& assignment) {
-  const size_t eq = assignment.find('=');
-  if (eq == std::string::npos) throw Error("segmenter option: expected NAME=VALUE, got '" + assignment + "'");
-  const std::string name = assignment.substr(0, eq), text = assignment.substr(eq + 1);
-  double value = 0;
-  try {
-    size_t used = 0;
-    value = std::stod(text, &used);
-    if (used != text.size()) throw std::invalid_argument(text);
-  } catch (const std::exception&) {
-    throw Error("segmenter option " + name + ": not a number: '" + text + "'");
-  }
+  const NumericAssignment parsed = ParseNumericAssignment(assignment, "segmenter option");
+  const std::string& name = parsed.name;
+  const std::string& text = parsed.text;
+  const double value = parsed.value;
   const auto doubles = DoubleFields(this);
   const auto ints = IntFields(this);
   if (auto it = doubles.find(name); it != doubles.end()) {

@@ -3,9 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <stdexcept>
 
 #include "core/error.h"
+#include "core/option_assignment.h"
 
 namespace segslam::slam {
 
@@ -69,24 +69,14 @@ const std::map<std::string, Setter>& Setters() {
 }  // namespace
 
 void SetTrackerOption(TrackerOptions* options, const std::string& assignment) {
-  const size_t eq = assignment.find('=');
-  if (eq == std::string::npos) throw Error("tracker option: expected NAME=VALUE, got '" + assignment + "'");
-  const std::string name = assignment.substr(0, eq), text = assignment.substr(eq + 1);
-  const auto setter = Setters().find(name);
+  const NumericAssignment parsed = ParseNumericAssignment(assignment, "tracker option");
+  const auto setter = Setters().find(parsed.name);
   if (setter == Setters().end()) {
     std::string known;
     for (const std::string& n : TrackerOptionNames()) known += (known.empty() ? "" : ", ") + n;
-    throw Error("tracker option: unknown field '" + name + "' (known: " + known + ")");
+    throw Error("tracker option: unknown field '" + parsed.name + "' (known: " + known + ")");
   }
-  double value = 0;
-  try {
-    size_t used = 0;
-    value = std::stod(text, &used);
-    if (used != text.size()) throw std::invalid_argument(text);
-  } catch (const std::exception&) {
-    throw Error("tracker option " + name + ": not a number: '" + text + "'");
-  }
-  setter->second(options, value);
+  setter->second(options, parsed.value);
 }
 
 std::vector<std::string> TrackerOptionNames() {
