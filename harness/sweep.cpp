@@ -13,6 +13,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/json_file.h"
 #include "harness/report_document.h"
 #include "harness/report_figures.h"
 
@@ -36,15 +37,6 @@ std::vector<std::string> SplitValues(const std::string& text) {
   return values;
 }
 
-nlohmann::json ReadJson(const fs::path& path) {
-  std::ifstream in(path);
-  if (!in) throw Error(path.string() + ": cannot be read");
-  try {
-    return nlohmann::json::parse(in);
-  } catch (const nlohmann::json::exception& e) {
-    throw Error(path.string() + ": not valid JSON (" + e.what() + ")");
-  }
-}
 
 // The median, min and max of one metric of one mode and pass in a point's results.json;
 // NaN where the point has no value.
@@ -202,11 +194,11 @@ Shard Shard::Parse(const std::string& text) {
 std::string MergeSweep(const std::vector<fs::path>& inputs, const fs::path& out_dir) {
   if (inputs.empty()) throw Error("sweep merge: no sweep folders given");
   const fs::path grid_file = inputs.front() / "sweep.json";
-  const nlohmann::json sweep = ReadJson(grid_file);
+  const nlohmann::json sweep = ReadJsonFile(grid_file);
   const SweepGrid grid = SweepGrid::FromJson(sweep.value("grid", nlohmann::json::object()), grid_file.string());
   for (std::size_t i = 1; i < inputs.size(); ++i) {
     const fs::path other = inputs[i] / "sweep.json";
-    if (ReadJson(other).value("grid", nlohmann::json::object()) != sweep["grid"]) {
+    if (ReadJsonFile(other).value("grid", nlohmann::json::object()) != sweep["grid"]) {
       throw Error("sweep merge: " + other.string() + " holds another grid than " + grid_file.string());
     }
   }
@@ -221,7 +213,7 @@ std::string MergeSweep(const std::vector<fs::path>& inputs, const fs::path& out_
     for (const fs::path& input : inputs) {
       const fs::path file = input / "points" / name / "results.json";
       if (!fs::exists(file)) continue;
-      results[p] = ReadJson(file);
+      results[p] = ReadJsonFile(file);
       const fs::path target = out_dir / "points" / name / "results.json";
       if (!fs::exists(target) || !fs::equivalent(file, target)) {
         fs::create_directories(target.parent_path());

@@ -12,6 +12,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/json_file.h"
 #include "harness/commands.h"
 #include "harness/scenario_runner.h"
 #include "harness/sweep.h"
@@ -40,8 +41,7 @@ bool PointIsDone(const fs::path& point_dir, const std::vector<std::string>& over
   const fs::path file = point_dir / "results.json";
   if (!fs::exists(file)) return false;
   try {
-    std::ifstream in(file);
-    const nlohmann::json results = nlohmann::json::parse(in);
+    const nlohmann::json results = ReadJsonFile(file);
     return results.value("overrides", std::vector<std::string>{}) == overrides &&
            results.value("code_version", std::string()) == SEGSLAM_VERSION;
   } catch (const std::exception&) {
@@ -70,11 +70,11 @@ int RunSweep(const SweepArgs& args) {
   const nlohmann::json sweep = {{"scenario_file", args.run.scenario_file}, {"grid", grid.ToJson()}};
   const fs::path sweep_file = out_dir / "sweep.json";
   if (fs::exists(sweep_file)) {
-    std::ifstream in(sweep_file);
     nlohmann::json existing;
     try {
-      existing = nlohmann::json::parse(in);
-    } catch (const std::exception&) {
+      existing = ReadJsonFile(sweep_file);
+    } catch (const Error&) {
+      // unreadable: refused below like another sweep's
     }
     if (existing.value("grid", nlohmann::json()) != sweep["grid"]) {
       throw Error("sweep: " + out_dir.string() + " holds another sweep (sweep.json differs); choose another --out");

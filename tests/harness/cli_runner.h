@@ -9,6 +9,9 @@
 #include <fstream>
 #include <iterator>
 #include <string>
+#include <utility>
+
+#include <gtest/gtest.h>
 
 namespace segslam::testing {
 
@@ -41,5 +44,23 @@ inline int LineCount(const std::string& text) {
   for (const char c : text) lines += c == '\n';
   return lines;
 }
+
+// A test with its own scratch folder (removed afterwards) in which it runs the binary.
+class CliScratchTest : public ::testing::Test {
+ protected:
+  explicit CliScratchTest(std::string prefix) : prefix_(std::move(prefix)) {}
+  void SetUp() override {
+    dir_ = std::filesystem::temp_directory_path() /
+           (prefix_ + std::to_string(::getpid()) + "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    std::filesystem::remove_all(dir_);
+    std::filesystem::create_directories(dir_);
+  }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+  CommandOutput Run(const std::string& arguments) { return RunSegslam(arguments, dir_); }
+  std::filesystem::path dir_;
+
+ private:
+  std::string prefix_;
+};
 
 }  // namespace segslam::testing

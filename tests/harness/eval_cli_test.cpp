@@ -21,17 +21,9 @@ using segslam::testing::ReadText;
 
 const fs::path kDataDir = SEGSLAM_TEST_DATA_DIR;
 
-class EvalCliTest : public ::testing::Test {
+class EvalCliTest : public segslam::testing::CliScratchTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("segslam_eval_" + std::to_string(::getpid()) + "_" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  CommandOutput Run(const std::string& arguments) { return segslam::testing::RunSegslam(arguments, dir_); }
-  fs::path dir_;
+  EvalCliTest() : CliScratchTest("segslam_eval_") {}
 };
 
 // The fields of the row of `segslam run`'s table that starts with `name`.

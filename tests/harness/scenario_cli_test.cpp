@@ -20,16 +20,9 @@ using segslam::testing::ReadText;
 
 const fs::path kSmallOffice = fs::path(SEGSLAM_SOURCE_DIR) / "scenarios" / "test" / "office_small.yaml";
 
-class ScenarioCliTest : public ::testing::Test {
+class ScenarioCliTest : public segslam::testing::CliScratchTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("segslam_scenario_" + std::to_string(::getpid()) + "_" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  CommandOutput Run(const std::string& arguments) { return segslam::testing::RunSegslam(arguments, dir_); }
+  ScenarioCliTest() : CliScratchTest("segslam_scenario_") {}
 
   // office_small.yaml with extra sections appended.
   fs::path WriteScenario(const std::string& name, const std::string& sections) {
@@ -37,7 +30,6 @@ class ScenarioCliTest : public ::testing::Test {
     std::ofstream(file) << ReadText(kSmallOffice) << sections;
     return file;
   }
-  fs::path dir_;
 };
 
 int Count(const std::string& text, const std::string& what) {

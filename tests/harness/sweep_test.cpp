@@ -67,17 +67,9 @@ TEST(SweepShardTest, ShardsCoverEveryPointExactlyOnce) {
   for (const char* bad : {"0/2", "3/2", "1/0", "1-2", "a/b", "1/2x"}) EXPECT_THROW(Shard::Parse(bad), Error) << bad;
 }
 
-class SweepCliTest : public ::testing::Test {
+class SweepCliTest : public segslam::testing::CliScratchTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("segslam_sweep_" + std::to_string(::getpid()) + "_" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  CommandOutput Run(const std::string& arguments) { return segslam::testing::RunSegslam(arguments, dir_); }
-  fs::path dir_;
+  SweepCliTest() : CliScratchTest("segslam_sweep_") {}
 };
 
 const std::string kSmallOffice = (fs::path(SEGSLAM_SOURCE_DIR) / "scenarios" / "test" / "office_small.yaml").string();
