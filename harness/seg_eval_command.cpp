@@ -69,6 +69,7 @@ void SetRefinerOption(seg::RefinerOptions* o, const std::string& assignment) {
       {"max_match_cost", &o->max_match_cost},
       {"splat_footprint_scale", &o->splat_footprint_scale},
       {"depth_tolerance", &o->depth_tolerance},
+      {"occlusion_tolerance", &o->occlusion_tolerance},
       {"min_depth_m", &o->min_depth_m},
       {"repair_min_current_inside", &o->repair_min_current_inside},
       {"repair_max_projected_covered", &o->repair_max_projected_covered},

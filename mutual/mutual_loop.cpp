@@ -59,6 +59,7 @@ MutualFrameResult MutualLoop::ProcessFrame(const RgbdFrame& frame) {
   if (can_project) {
     input.previous_refined = &*previous_refined_;
     input.previous_depth_m = previous_depth_m_;
+    input.current_depth_m = frame.depth_m;
     input.T_wc_previous_fine = *previous_T_wc_fine_;
     input.T_wc_current_coarse = *T_wc_coarse;
   }

@@ -457,8 +457,18 @@ class OfficeBuilder {
   // ---- People walking ------------------------------------------------------------------
   void MakeWalkers() {
     std::mt19937_64 rng = Rng("walkers");
+    std::vector<int> placed;
+    for (std::size_t i = 0; i < world_.objects.size(); ++i) {
+      if (world_.objects[i].articulation == Articulation::kSitter) placed.push_back(static_cast<int>(i));
+    }
+    // The camera's base pose is 2 m in front of the desk (MakeCamera).
+    const double front = desk_.x() - 2.0 + spec_.walker_front_distance_m;
+    if (spec_.walker_route == "in_front") {
+      MakeWalkersInFront(rng, front);
+      return;
+    }
     // Loops around the main desk (both directions) and a ping-pong line behind it.
-    const double front = desk_.x() - 0.85, back = desk_.x() + 1.45, side = 1.7;
+    const double back = desk_.x() + 1.45, side = 1.7;
     std::vector<PathMotion> paths;
     for (bool ccw : {true, false}) {
       PathMotion p;
@@ -473,10 +483,6 @@ class OfficeBuilder {
     PathMotion beside = line;  // from the door side, across in front of the desk and back
     beside.waypoints = {Vec3(front - 0.1, -Y_ / 2 + 0.6, 0), Vec3(front - 0.1, -side, 0), Vec3(back, -side, 0)};
     paths.push_back(beside);
-    std::vector<int> placed;
-    for (std::size_t i = 0; i < world_.objects.size(); ++i) {
-      if (world_.objects[i].articulation == Articulation::kSitter) placed.push_back(static_cast<int>(i));
-    }
     for (int k = 0; k < spec_.people_walking; ++k) {
       Object& o = MakePerson(rng);
       o.articulation = Articulation::kWalker;
@@ -487,6 +493,28 @@ class OfficeBuilder {
       PlaceOnPaths(&world_, rng, static_cast<int>(world_.objects.size()) - 1, mine, placed,
                    /*min_camera_m=*/0.6, /*min_other_m=*/0.7, /*step_s=*/0.1);
       placed.push_back(static_cast<int>(world_.objects.size()) - 1);
+    }
+  }
+
+  // A narrow loop from the front leg to half a metre short of the desk, 2.2 m wide: the
+  // leader starts near the middle of the front leg, so the pair is in the first frames
+  // (and in the first map) as in TUM's sequences; the others follow spacing_m apart.
+  void MakeWalkersInFront(std::mt19937_64& rng, double front) {
+    const double far = std::max(front + 0.2, std::min(front + 0.5, desk_.x() - 0.65)), half_width = 1.1;
+    PathMotion loop;
+    loop.waypoints = {Vec3(front, half_width, 0), Vec3(front, -half_width, 0), Vec3(far, -half_width, 0),
+                      Vec3(far, half_width, 0)};
+    loop.speed_mps = spec_.walking_speed_mps * Uniform(rng, 0.85, 1.15);
+    loop.start_offset_m = half_width + Uniform(rng, -0.3, 0.3);
+    for (int k = 0; k < spec_.people_walking; ++k) {
+      Object& o = MakePerson(rng);
+      o.articulation = Articulation::kWalker;
+      for (Placement& p : o.placement) {
+        p.present = true;
+        p.moving = true;
+        p.path = loop;
+        p.path.start_offset_m -= k * spec_.walker_spacing_m;
+      }
     }
   }
 

@@ -148,6 +148,10 @@ class FieldTable {
     Add("office.people_sitting", Int(&o.people_sitting, 0, 4, "office.people_sitting"));
     Add("office.walking_speed_mps",
         Double(&o.walking_speed_mps, Closed(0, 2.5), "office.walking_speed_mps"));
+    Add("office.walker_route", Choice(&o.walker_route, {"around_desk", "in_front"}, "office.walker_route"));
+    Add("office.walker_front_distance_m",
+        Double(&o.walker_front_distance_m, Closed(0.5, 1.9), "office.walker_front_distance_m"));
+    Add("office.walker_spacing_m", Double(&o.walker_spacing_m, Closed(0.4, 5), "office.walker_spacing_m"));
   }
 
   const Field* Find(const std::string& key) const {

@@ -63,6 +63,15 @@ struct OfficeSpec {
   int people_walking = 2;
   int people_sitting = 0;
   double walking_speed_mps = 0.8;
+  // around_desk: each walker on a route of its own, loops around the main desk or a line
+  // behind it. in_front: the walkers go one behind the other round a narrow loop between
+  // the camera and the desk, in view most of the time and filling much of the image, as
+  // the pair in TUM's fr3/walking sequences does (what makes plain ORB-SLAM2 fail there).
+  std::string walker_route = "around_desk";
+  // Leg of the walkers' loop nearest to the camera's base pose, ahead of it.
+  double walker_front_distance_m = 1.15;
+  // in_front: gap along the loop from one walker to the next.
+  double walker_spacing_m = 0.6;
 };
 
 struct Scenario {

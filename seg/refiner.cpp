@@ -111,6 +111,9 @@ bool RefinerOptions::IsValid(std::string* error) const {
   if (!finite(depth_tolerance) || depth_tolerance < 0 || depth_tolerance >= 1) {
     return fail("depth_tolerance must lie in [0, 1)");
   }
+  if (!finite(occlusion_tolerance) || occlusion_tolerance < 0 || occlusion_tolerance >= 1) {
+    return fail("occlusion_tolerance must lie in [0, 1)");
+  }
   if (!finite(min_depth_m) || min_depth_m <= 0) return fail("min_depth_m must be > 0");
   if (min_projected_area_px < 0) return fail("min_projected_area_px must be >= 0");
   if (!finite(replace_min_ratio_gap) || replace_min_ratio_gap < 0 ||
@@ -168,9 +171,10 @@ void ProjectInto(const RefinerOptions& options, const PinholeCamera& camera,
                  const FrameSegmentation& previous_refined, const cv::Mat& previous_depth_m,
                  const Eigen::Isometry3d& T_cur_prev,
                  const std::map<std::uint16_t, Eigen::Isometry3d>& instance_motion_prev,
-                 ProjectionWorkspace* ws) {
+                 const cv::Mat& current_depth_m, ProjectionWorkspace* ws) {
   const int W = camera.width, H = camera.height;
   CheckInputImage(previous_depth_m, CV_32F, camera, "previous depth");
+  if (!current_depth_m.empty()) CheckInputImage(current_depth_m, CV_32F, camera, "current depth");
   const size_t n = previous_refined.instances.size();
   if (ws->zbuf.rows != H || ws->zbuf.cols != W) {
     ws->zbuf.create(H, W, CV_32F);
@@ -337,6 +341,18 @@ void ProjectInto(const RefinerOptions& options, const PinholeCamera& camera,
 
   ws->dirty = all_touched;
 
+  if (!current_depth_m.empty() && !all_touched.empty()) {
+    const float keep = static_cast<float>(1.0 - options.occlusion_tolerance);
+    for (int y = all_touched.y; y < all_touched.br().y; ++y) {
+      const float* zr = zbuf.ptr<float>(y);
+      const float* dr = current_depth_m.ptr<float>(y);
+      std::uint16_t* lr = label.ptr<std::uint16_t>(y);
+      for (int x = all_touched.x; x < all_touched.br().x; ++x) {
+        if (lr[x] != 0 && dr[x] > 0 && dr[x] < keep * zr[x]) lr[x] = 0;
+      }
+    }
+  }
+
   // Per region: box, area and barycentre of its visible pixels, within the box it
   // wrote (closing stays inside it).
   for (size_t i = 0; i < n; ++i) {
@@ -407,7 +423,7 @@ std::vector<ProjectedRegion> ProjectRegions(
     const std::map<std::uint16_t, Eigen::Isometry3d>& instance_motion_prev) {
   ProjectionWorkspace ws;
   ProjectInto(options, camera, previous_refined, previous_depth_m, T_cur_prev,
-              instance_motion_prev, &ws);
+              instance_motion_prev, cv::Mat(), &ws);
   std::vector<ProjectedRegion> out(previous_refined.instances.size());
   for (size_t i = 0; i < out.size(); ++i) {
     out[i].mask = RegionMask(ws, i);
@@ -489,7 +505,7 @@ RefinementResult SegmentationRefiner::Refine(const RefinerInput& in) {
   const Eigen::Isometry3d T_cur_prev =
       in.T_wc_current_coarse.inverse() * in.T_wc_previous_fine;
   ProjectInto(options_, in.camera, previous, in.previous_depth_m, T_cur_prev,
-              in.instance_motion_prev, workspace_.get());
+              in.instance_motion_prev, in.current_depth_m, workspace_.get());
   const ProjectionWorkspace& ws = *workspace_;
   const std::vector<RegionStats>& prev_stats = ws.regions;
 

@@ -88,6 +88,11 @@ struct RefinerOptions {
   // 0.05: an order above RGB-D noise (~1% at 3 m) yet separates objects 15 cm apart at
   // 3 m.
   double depth_tolerance = 0.05;
+  // Relative depth margin by which the current depth must lie in front of a projected
+  // pixel to hide it (RefinerInput::current_depth_m); in [0, 1). 0.1: above RGB-D noise
+  // and the projection's own depth error, below the gap between a walker and what is
+  // behind.
+  double occlusion_tolerance = 0.1;
   // Projected points nearer than this (metres, > 0) are dropped (behind/at the camera).
   double min_depth_m = 0.05;
   // Projected regions smaller than this (pixels, >= 0) are not added: a sliver at the
@@ -207,6 +212,10 @@ struct RefinerInput {
   // instances get fresh ids and are returned as refined). Not owned.
   const FrameSegmentation* previous_refined = nullptr;
   cv::Mat previous_depth_m;  // CV_32F metres of frame t-1, 0 = none
+  // Optional, CV_32F metres of frame t: projected pixels that something nearer now hides
+  // (by more than occlusion_tolerance) are dropped, so a person who walks behind another
+  // is not given back the part the other now covers.
+  cv::Mat current_depth_m;
   Eigen::Isometry3d T_wc_previous_fine = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d T_wc_current_coarse = Eigen::Isometry3d::Identity();
   FrameSegmentation current_initial;  // the segmenter's instances of frame t

@@ -77,6 +77,7 @@ SequenceSegEval EvaluateSequenceWithGroundTruthPoses(const SegEvalOptions& optio
     RefinerInput input;
     input.previous_refined = previous_refined ? &*previous_refined : nullptr;
     input.previous_depth_m = previous_depth;
+    input.current_depth_m = frame.depth_m;
     input.T_wc_previous_fine = sequence.groundtruth()[i > 0 ? i - 1 : 0].T_wc;
     input.T_wc_current_coarse = sequence.groundtruth()[i].T_wc;
     input.current_initial = initial;

@@ -277,6 +277,7 @@ std::map<std::string, double*> DoubleFields(SimulatedSegmenterOptions* o) {
           {"miss_small_prob", &o->miss_small_prob},
           {"small_area_fraction", &o->small_area_fraction},
           {"miss_truncated_prob", &o->miss_truncated_prob},
+          {"truncated_large_area_fraction", &o->truncated_large_area_fraction},
           {"miss_occluded_prob", &o->miss_occluded_prob},
           {"miss_moving_prob", &o->miss_moving_prob},
           {"difficulty_sd", &o->difficulty_sd},
@@ -382,6 +383,7 @@ bool SimulatedSegmenterOptions::IsValid(std::string* error) const {
       {"small_area_fraction", small_area_fraction, 0, 1},
       {"min_area_px", static_cast<double>(min_area_px), 0, inf},
       {"miss_truncated_prob", miss_truncated_prob, 0, 1},
+      {"truncated_large_area_fraction", truncated_large_area_fraction, 0, 1},
       {"miss_occluded_prob", miss_occluded_prob, 0, 1},
       {"occlusion_window", static_cast<double>(occlusion_window), 0, inf},
       {"miss_moving_prob", miss_moving_prob, 0, 1},
@@ -472,7 +474,11 @@ SimulatedFrame SimulateSegmentation(const SimulatedSegmenterOptions& options, st
         o.small_area_fraction > 0
             ? std::max(0.0, 1.0 - gt.area / (o.small_area_fraction * image_area))
             : 0.0;
-    const double truncation = std::min(1.0, gt.border_pixels / std::max(1.0, sqrt_area));
+    const double large_relief =
+        o.truncated_large_area_fraction > 0
+            ? std::max(0.0, 1.0 - gt.area / (o.truncated_large_area_fraction * image_area))
+            : 1.0;
+    const double truncation = std::min(1.0, gt.border_pixels / std::max(1.0, sqrt_area)) * large_relief;
     const double occlusion = 1.0 - std::clamp(ctx.visible_share, 0.0, 1.0);
     double p_miss = o.miss_prob + o.miss_small_prob * small_share +
                     o.miss_truncated_prob * truncation + o.miss_occluded_prob * occlusion +

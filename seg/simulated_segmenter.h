@@ -54,6 +54,10 @@ struct SimulatedSegmenterOptions {
   // Extra miss probability of an instance fully truncated by the image border
   // (border pixels >= sqrt(area)); scales linearly with the truncation, [0, 1].
   double miss_truncated_prob = 0.6;
+  // The truncation's extra miss probability fades linearly to 0 as the visible area
+  // grows to this share of the image: a person a metre from the lens, cut at the waist
+  // by the border, is still found (FCIS and Mask R-CNN find TUM's walkers), [0, 1].
+  double truncated_large_area_fraction = 0.08;
   // Extra miss probability of a fully occluded instance; scales linearly with
   // 1 - visible share (visible pixels over their maximum within +-`occlusion_window`
   // frames, from tracks.json), [0, 1].

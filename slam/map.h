@@ -47,6 +47,7 @@ struct MapPoint {
   bool bad = false;
   std::array<std::uint8_t, 3> color_rgb{};
   std::uint64_t first_keyframe_id = 0;
+  double first_stamp_s = 0;                 // when it was made (not stored in map files)
   int visible_count = 1;                    // frames whose frustum it was in
   int found_count = 1;                      // frames that matched it
   int num_loaded_observations = 0;          // observations recorded in the map file

@@ -180,6 +180,12 @@ struct MotionEvidence {
   }
 };
 
+// Consecutive frames (none more than moving_memory_s apart) an instance was measured moving.
+struct MovingStreak {
+  int frames = 0;
+  double last_stamp_s = -1e9;
+};
+
 struct WorkingFrame {
   int index = -1;
   double stamp_s = 0;
@@ -233,6 +239,7 @@ struct Tracker::Impl {
   bool last_status_lost = false;
   bool localization_mode = false;
   std::deque<InstanceSnapshot> history;
+  std::map<std::uint16_t, MovingStreak> moving_streaks;  // per instance id
   std::vector<MapPoint*> recent_points;
   int keyframes_since_purge = 0;
 
@@ -719,6 +726,7 @@ struct Tracker::Impl {
       point->position_w = T_wc * current.features.points_cam[i];
       point->instance_id = current.instance[i];
       point->first_keyframe_id = keyframe->id;
+      point->first_stamp_s = current.stamp_s;
       point->last_matched_frame = current.index;
       point->last_visible_frame = current.index;
       const cv::KeyPoint& kp = current.features.keypoints[i];
@@ -1035,7 +1043,12 @@ std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& ins
       for (int f : features) {
         const size_t i = static_cast<size_t>(f);
         const MapPoint* point = s.current.points[i] != nullptr ? s.current.points[i] : s.current.rejected[i];
-        if (point == nullptr || point->bad) {
+        // A point made less than a baseline ago has not seen the object move far enough
+        // to tell (a walker covers 1-2 cm per frame, under the threshold): the instance's
+        // own features a baseline back measure it instead.
+        const bool too_young =
+            point != nullptr && !point->fixed && s.current.stamp_s - point->first_stamp_s < options_.motion_baseline_s - 1e-6;
+        if (point == nullptr || point->bad || too_young) {
           unmatched.push_back(f);
           continue;
         }
@@ -1054,6 +1067,25 @@ std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& ins
       judgement.moving =
           measured && judgement.moving_share >= options_.moving_share_threshold && evidence.ConsensusMoves();
       judgement.judged = measured && (judgement.moving || full_baseline);
+      MovingStreak& streak = s.moving_streaks[id];
+      if (judgement.moving) {
+        streak.frames = s.current.stamp_s - streak.last_stamp_s <= options_.moving_memory_s + 1e-9 ? streak.frames + 1 : 1;
+        streak.last_stamp_s = s.current.stamp_s;
+      }
+      const bool known_mover = streak.frames >= options_.moving_streak_frames &&
+                               s.current.stamp_s - streak.last_stamp_s <= options_.moving_memory_s + 1e-9;
+      // A small object cannot show min_points_to_clear_moving points: an eighth of its
+      // features is enough there.
+      const int points_to_clear = std::min(options_.min_points_to_clear_moving,
+                                           std::max(options_.min_points_to_judge, judgement.num_features / 8));
+      if (known_mover && !judgement.moving) {
+        if (judgement.num_points < points_to_clear) {
+          judgement.moving = true;
+          judgement.judged = true;
+        } else if (judgement.judged) {
+          streak.frames = 0;  // cleared: it has stopped
+        }
+      }
     }
     // A moveable object that cannot be judged yet is kept out of the pose and the map
     // until it can: mapping a walking person because it was not measured is the error

@@ -170,6 +170,16 @@ struct TrackerOptions {
   // a parked car must not make it a moving one (all points of a moving rigid object move).
   int min_points_to_judge = 4;
   double moving_share_threshold = 0.5;
+  // An instance measured moving on moving_streak_frames frames in a row (none more than
+  // moving_memory_s apart) stays moving, until it is seen again with at least
+  // min_points_to_clear_moving measured features (or an eighth of its features, when that
+  // is fewer). A walker matched on a handful of points for one frame would otherwise
+  // enter the map, and a pair walking together then drags the coarse pose with it (the
+  // failure seen on in_front walking scenes); a one-frame blip on a still object does not
+  // start a streak.
+  int moving_streak_frames = 5;
+  double moving_memory_s = 1.0;
+  int min_points_to_clear_moving = 20;
   // Long-term map export: points seen in at least this many keyframes.
   int long_term_min_observations = 2;
   // Pose of the first frame when no map is loaded (the map's frame).

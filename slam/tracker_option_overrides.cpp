@@ -57,6 +57,9 @@ const std::map<std::string, Setter>& Setters() {
       SEGSLAM_REAL(motion_baseline_s),
       SEGSLAM_INT(min_points_to_judge),
       SEGSLAM_REAL(moving_share_threshold),
+      SEGSLAM_INT(moving_streak_frames),
+      SEGSLAM_REAL(moving_memory_s),
+      SEGSLAM_INT(min_points_to_clear_moving),
       SEGSLAM_INT(long_term_min_observations),
   };
   return setters;

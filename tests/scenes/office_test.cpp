@@ -132,5 +132,40 @@ TEST(OfficeTest, WalkingScenariosKeepPeopleInView) {
   EXPECT_GT(in_view, samples / 4);
 }
 
+TEST(OfficeTest, InFrontWalkersStartInViewAsAPairNearTheLens) {
+  // TUM's walking sequences: the pair is in the first frames and passes about a metre
+  // from the lens, never into it.
+  const Scenario s = LoadScenario(ScenarioPath("office_walking_xyz.yaml"));
+  ASSERT_EQ(s.office.walker_route, "in_front");
+  const World w = BuildWorld(s);
+  std::vector<const Object*> walkers;
+  for (const Object& o : w.objects) {
+    if (o.articulation == Articulation::kWalker) walkers.push_back(&o);
+  }
+  ASSERT_EQ(walkers.size(), 2u);
+  int in_view = 0, samples = 0, in_first_frame = 0;
+  double nearest_m = 1e9;
+  for (int f = 0; f < w.frames_per_pass[0]; f += 5) {
+    const double t = FrameStamp(w, f);
+    const Eigen::Isometry3d T_wc = CameraPoseAt(w, Pass::kFirst, t);
+    const Eigen::Vector3d a = ObjectPoseAt(*walkers[0], Pass::kFirst, t).translation();
+    const Eigen::Vector3d b = ObjectPoseAt(*walkers[1], Pass::kFirst, t).translation();
+    EXPECT_GT((a - b).head<2>().norm(), 0.35) << "walkers overlap at t=" << t;
+    for (const Object* o : walkers) {
+      const Eigen::Vector3d p_w = ObjectPoseAt(*o, Pass::kFirst, t).translation();
+      nearest_m = std::min(nearest_m, (p_w - T_wc.translation()).head<2>().norm());
+      const Eigen::Vector3d p = T_wc.inverse() * (p_w + Eigen::Vector3d(0, 0, 1.0));
+      const bool visible = p.z() > 0.3 && std::abs(p.x() / p.z()) < 0.6 && std::abs(p.y() / p.z()) < 0.45;
+      ++samples;
+      in_view += visible;
+      if (f == 0) in_first_frame += visible;
+    }
+  }
+  EXPECT_GE(in_first_frame, 1);
+  EXPECT_GT(in_view, samples / 2);
+  EXPECT_LT(nearest_m, 1.2);
+  EXPECT_GT(nearest_m, 0.5);
+}
+
 }  // namespace
 }  // namespace segslam::scenes
