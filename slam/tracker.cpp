@@ -184,6 +184,7 @@ struct MotionEvidence {
 struct MovingStreak {
   int frames = 0;
   double last_stamp_s = -1e9;
+  int static_frames = 0;  // judged static over a full baseline, frames in a row
 };
 
 struct WorkingFrame {
@@ -1039,15 +1040,19 @@ std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& ins
     judgement.num_features = static_cast<int>(features.size());
     std::vector<int> unmatched;
     MotionEvidence evidence;
+    MovingStreak& streak = s.moving_streaks[id];
+    // Once an instance has been seen still over a full baseline, its young points serve
+    // again (a parked car stays parked); until then, or once it moves, they do not.
+    const bool trust_young_points = streak.static_frames >= options_.static_frames_to_trust_young_points;
     if (s.coarse_ok) {
       for (int f : features) {
         const size_t i = static_cast<size_t>(f);
         const MapPoint* point = s.current.points[i] != nullptr ? s.current.points[i] : s.current.rejected[i];
         // A point made less than a baseline ago has not seen the object move far enough
         // to tell (a walker covers 1-2 cm per frame, under the threshold): the instance's
-        // own features a baseline back measure it instead.
-        const bool too_young =
-            point != nullptr && !point->fixed && s.current.stamp_s - point->first_stamp_s < options_.motion_baseline_s - 1e-6;
+        // own features a baseline back measure it instead, or older points.
+        const bool too_young = !trust_young_points && point != nullptr && !point->fixed &&
+                               s.current.stamp_s - point->first_stamp_s < options_.motion_baseline_s - 1e-6;
         if (point == nullptr || point->bad || too_young) {
           unmatched.push_back(f);
           continue;
@@ -1067,7 +1072,6 @@ std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& ins
       judgement.moving =
           measured && judgement.moving_share >= options_.moving_share_threshold && evidence.ConsensusMoves();
       judgement.judged = measured && (judgement.moving || full_baseline);
-      MovingStreak& streak = s.moving_streaks[id];
       if (judgement.moving) {
         streak.frames = s.current.stamp_s - streak.last_stamp_s <= options_.moving_memory_s + 1e-9 ? streak.frames + 1 : 1;
         streak.last_stamp_s = s.current.stamp_s;
@@ -1085,6 +1089,11 @@ std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& ins
         } else if (judgement.judged) {
           streak.frames = 0;  // cleared: it has stopped
         }
+      }
+      if (judgement.moving) {
+        streak.static_frames = 0;
+      } else if (judgement.judged && full_baseline) {
+        ++streak.static_frames;
       }
     }
     // A moveable object that cannot be judged yet is kept out of the pose and the map

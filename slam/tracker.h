@@ -180,6 +180,10 @@ struct TrackerOptions {
   int moving_streak_frames = 5;
   double moving_memory_s = 1.0;
   int min_points_to_clear_moving = 20;
+  // Map points younger than motion_baseline_s do not judge an instance (a walker covers
+  // 1-2 cm per frame, under the threshold) until the instance has been judged static
+  // over a full baseline on this many frames in a row (a parked car stays parked).
+  int static_frames_to_trust_young_points = 10;
   // Long-term map export: points seen in at least this many keyframes.
   int long_term_min_observations = 2;
   // Pose of the first frame when no map is loaded (the map's frame).

@@ -60,6 +60,7 @@ const std::map<std::string, Setter>& Setters() {
       SEGSLAM_INT(moving_streak_frames),
       SEGSLAM_REAL(moving_memory_s),
       SEGSLAM_INT(min_points_to_clear_moving),
+      SEGSLAM_INT(static_frames_to_trust_young_points),
       SEGSLAM_INT(long_term_min_observations),
   };
   return setters;
