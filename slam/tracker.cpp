@@ -180,10 +180,10 @@ struct MotionEvidence {
   }
 };
 
-// Consecutive frames (none more than moving_memory_s apart) an instance was measured moving.
-struct MovingStreak {
-  int frames = 0;
-  double last_stamp_s = -1e9;
+// What the judgement remembers of one instance between frames.
+struct InstanceMotionMemory {
+  int moving_frames = 0;  // measured moving, frames in a row (none moving_memory_s apart)
+  double last_moving_stamp_s = -1e9;
   int static_frames = 0;  // judged static over a full baseline, frames in a row
 };
 
@@ -240,7 +240,7 @@ struct Tracker::Impl {
   bool last_status_lost = false;
   bool localization_mode = false;
   std::deque<InstanceSnapshot> history;
-  std::map<std::uint16_t, MovingStreak> moving_streaks;  // per instance id
+  std::map<std::uint16_t, InstanceMotionMemory> motion_memory;  // per instance id
   std::vector<MapPoint*> recent_points;
   int keyframes_since_purge = 0;
 
@@ -1040,10 +1040,10 @@ std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& ins
     judgement.num_features = static_cast<int>(features.size());
     std::vector<int> unmatched;
     MotionEvidence evidence;
-    MovingStreak& streak = s.moving_streaks[id];
+    InstanceMotionMemory& memory = s.motion_memory[id];
     // Once an instance has been seen still over a full baseline, its young points serve
     // again (a parked car stays parked); until then, or once it moves, they do not.
-    const bool trust_young_points = streak.static_frames >= options_.static_frames_to_trust_young_points;
+    const bool trust_young_points = memory.static_frames >= options_.static_frames_to_trust_young_points;
     if (s.coarse_ok) {
       for (int f : features) {
         const size_t i = static_cast<size_t>(f);
@@ -1073,11 +1073,12 @@ std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& ins
           measured && judgement.moving_share >= options_.moving_share_threshold && evidence.ConsensusMoves();
       judgement.judged = measured && (judgement.moving || full_baseline);
       if (judgement.moving) {
-        streak.frames = s.current.stamp_s - streak.last_stamp_s <= options_.moving_memory_s + 1e-9 ? streak.frames + 1 : 1;
-        streak.last_stamp_s = s.current.stamp_s;
+        const bool in_a_row = s.current.stamp_s - memory.last_moving_stamp_s <= options_.moving_memory_s + 1e-9;
+        memory.moving_frames = in_a_row ? memory.moving_frames + 1 : 1;
+        memory.last_moving_stamp_s = s.current.stamp_s;
       }
-      const bool known_mover = streak.frames >= options_.moving_streak_frames &&
-                               s.current.stamp_s - streak.last_stamp_s <= options_.moving_memory_s + 1e-9;
+      const bool known_mover = memory.moving_frames >= options_.moving_streak_frames &&
+                               s.current.stamp_s - memory.last_moving_stamp_s <= options_.moving_memory_s + 1e-9;
       // A small object cannot show min_points_to_clear_moving points: an eighth of its
       // features is enough there.
       const int points_to_clear = std::min(options_.min_points_to_clear_moving,
@@ -1087,13 +1088,13 @@ std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& ins
           judgement.moving = true;
           judgement.judged = true;
         } else if (judgement.judged) {
-          streak.frames = 0;  // cleared: it has stopped
+          memory.moving_frames = 0;  // cleared: it has stopped
         }
       }
       if (judgement.moving) {
-        streak.static_frames = 0;
+        memory.static_frames = 0;
       } else if (judgement.judged && full_baseline) {
-        ++streak.static_frames;
+        ++memory.static_frames;
       }
     }
     // A moveable object that cannot be judged yet is kept out of the pose and the map
