@@ -457,15 +457,15 @@ class OfficeBuilder {
   // ---- People walking ------------------------------------------------------------------
   void MakeWalkers() {
     std::mt19937_64 rng = Rng("walkers");
-    std::vector<int> placed;
-    for (std::size_t i = 0; i < world_.objects.size(); ++i) {
-      if (world_.objects[i].articulation == Articulation::kSitter) placed.push_back(static_cast<int>(i));
-    }
     // The camera's base pose is 2 m in front of the desk (MakeCamera).
     const double front = desk_.x() - 2.0 + spec_.walker_front_distance_m;
     if (spec_.walker_route == "in_front") {
       MakeWalkersInFront(rng, front);
       return;
+    }
+    std::vector<int> placed;  // sitters and walkers so far, kept clear of
+    for (std::size_t i = 0; i < world_.objects.size(); ++i) {
+      if (world_.objects[i].articulation == Articulation::kSitter) placed.push_back(static_cast<int>(i));
     }
     // Loops around the main desk (both directions) and a ping-pong line behind it.
     const double back = desk_.x() + 1.45, side = 1.7;
