@@ -46,6 +46,7 @@ enum Stream : std::uint64_t {
   kStreamScore,
   kStreamFalsePositives,
   kStreamOrder,
+  kStreamNeighbourBleed,
 };
 
 class Rng {
@@ -102,6 +103,13 @@ const std::vector<std::vector<int>>& ConfusionGroups() {
       {10, 13},              // traffic light, stop sign
   };
   return groups;
+}
+
+// COCO categories with the lowest mask AP of FCIS and Mask R-CNN.
+bool IsHardCategory(int category_id) {
+  static const std::vector<int> hard = {15, 62, 63, 64, 67, 84};  // bench, chair, couch,
+                                                                  // potted plant, dining table, book
+  return std::find(hard.begin(), hard.end(), category_id) != hard.end();
 }
 
 // The look-alikes of a category among `candidates` (empty if none).
@@ -205,6 +213,21 @@ void JitterBoundary(Rng* rng, double amplitude_px, double scale_px, cv::Mat* mas
   result.convertTo(*mask, CV_8U, 1.0 / 255.0);
 }
 
+// Replaces the 0/1 mask inside `box` by what a mask head of `resolution` x `resolution`
+// cells over that box can express: area-averaged onto the grid, resized back bilinearly,
+// thresholded at one half.
+void CoarsenToGrid(const cv::Rect& box, int resolution, cv::Mat* mask) {
+  if (box.width <= resolution && box.height <= resolution) return;  // Finer than the grid.
+  cv::Mat roi = (*mask)(box);
+  cv::Mat fine, coarse, back;
+  roi.convertTo(fine, CV_32F);
+  cv::resize(fine, coarse, cv::Size(resolution, resolution), 0, 0, cv::INTER_AREA);
+  cv::resize(coarse, back, box.size(), 0, 0, cv::INTER_LINEAR);
+  cv::Mat thresholded;
+  cv::compare(back, 0.5f, thresholded, cv::CMP_GE);
+  thresholded.convertTo(roi, CV_8U, 1.0 / 255.0);
+}
+
 // A random pixel of the 0/1 mask `m` (which has `count` nonzero pixels).
 cv::Point RandomPixelOf(Rng* rng, const cv::Mat& m, int count) {
   int k = rng->UniformInt(0, count - 1);
@@ -231,10 +254,12 @@ SimulatedSegmenterOptions SimulatedSegmenterOptions::Preset(const std::string& n
   if (name == "fcis-like") return o;
   if (name == "clean") {
     o.miss_prob = o.miss_small_prob = o.miss_truncated_prob = o.miss_occluded_prob = 0;
-    o.miss_moving_prob = o.difficulty_sd = 0;
+    o.miss_moving_prob = o.difficulty_sd = o.hard_category_difficulty = 0;
     o.min_area_px = 0;
     o.hole_prob = o.cut_prob = o.bleed_prob = o.bleed_blob_prob = 0;
+    o.neighbour_bleed_prob = 0;
     o.boundary_jitter_fraction = o.boundary_jitter_px = 0;
+    o.mask_resolution = 0;
     o.confusion_prob = 0;
     o.false_positives_per_frame = 0;
     o.score_noise_sd = 0;
@@ -256,7 +281,11 @@ SimulatedSegmenterOptions SimulatedSegmenterOptions::Preset(const std::string& n
     return o;
   }
   if (name == "poor") {
+    // A weak network: every error twice as likely and as large, coarse masks that
+    // spread into their neighbours.
     o.strength = 2.0;
+    o.mask_resolution = 21;
+    o.neighbour_bleed_prob = 0.1;
     return o;
   }
   std::string names;
@@ -281,6 +310,7 @@ std::map<std::string, double*> DoubleFields(SimulatedSegmenterOptions* o) {
           {"miss_occluded_prob", &o->miss_occluded_prob},
           {"miss_moving_prob", &o->miss_moving_prob},
           {"difficulty_sd", &o->difficulty_sd},
+          {"hard_category_difficulty", &o->hard_category_difficulty},
           {"hole_prob", &o->hole_prob},
           {"hole_radius_fraction", &o->hole_radius_fraction},
           {"cut_prob", &o->cut_prob},
@@ -288,6 +318,8 @@ std::map<std::string, double*> DoubleFields(SimulatedSegmenterOptions* o) {
           {"bleed_prob", &o->bleed_prob},
           {"bleed_fraction_max", &o->bleed_fraction_max},
           {"bleed_blob_prob", &o->bleed_blob_prob},
+          {"neighbour_bleed_prob", &o->neighbour_bleed_prob},
+          {"neighbour_bleed_fraction_max", &o->neighbour_bleed_fraction_max},
           {"boundary_jitter_fraction", &o->boundary_jitter_fraction},
           {"boundary_jitter_px", &o->boundary_jitter_px},
           {"boundary_jitter_scale_fraction", &o->boundary_jitter_scale_fraction},
@@ -304,7 +336,8 @@ std::map<std::string, double*> DoubleFields(SimulatedSegmenterOptions* o) {
 std::map<std::string, int*> IntFields(SimulatedSegmenterOptions* o) {
   return {{"min_area_px", &o->min_area_px},
           {"occlusion_window", &o->occlusion_window},
-          {"hole_count_max", &o->hole_count_max}};
+          {"hole_count_max", &o->hole_count_max},
+          {"mask_resolution", &o->mask_resolution}};
 }
 
 }  // namespace
@@ -349,6 +382,7 @@ SimulatedSegmenterOptions SimulatedSegmenterOptions::Effective() const {
   e.miss_moving_prob = prob(miss_moving_prob);
   e.min_area_px = static_cast<int>(std::lround(min_area_px * s));
   e.difficulty_sd = difficulty_sd * s;
+  e.hard_category_difficulty = hard_category_difficulty * s;
   e.hole_prob = prob(hole_prob);
   e.hole_radius_fraction = std::min(1.0, hole_radius_fraction * s);
   e.cut_prob = prob(cut_prob);
@@ -356,8 +390,12 @@ SimulatedSegmenterOptions SimulatedSegmenterOptions::Effective() const {
   e.bleed_prob = prob(bleed_prob);
   e.bleed_fraction_max = std::min(1.0, bleed_fraction_max * s);
   e.bleed_blob_prob = prob(bleed_blob_prob);
+  e.neighbour_bleed_prob = prob(neighbour_bleed_prob);
+  e.neighbour_bleed_fraction_max = std::min(1.0, neighbour_bleed_fraction_max * s);
   e.boundary_jitter_fraction = std::min(1.0, boundary_jitter_fraction * s);
   e.boundary_jitter_px = boundary_jitter_px * s;
+  e.mask_resolution =
+      (s > 0 && mask_resolution > 0) ? std::max(2, static_cast<int>(std::lround(mask_resolution / s))) : 0;
   e.confusion_prob = prob(confusion_prob);
   e.false_positives_per_frame = false_positives_per_frame * s;
   e.score_noise_sd = score_noise_sd * s;
@@ -388,6 +426,7 @@ bool SimulatedSegmenterOptions::IsValid(std::string* error) const {
       {"occlusion_window", static_cast<double>(occlusion_window), 0, inf},
       {"miss_moving_prob", miss_moving_prob, 0, 1},
       {"difficulty_sd", difficulty_sd, 0, 10},
+      {"hard_category_difficulty", hard_category_difficulty, 0, 10},
       {"hole_prob", hole_prob, 0, 1},
       {"hole_count_max", static_cast<double>(hole_count_max), 1, 100},
       {"hole_radius_fraction", hole_radius_fraction, 0, 1},
@@ -396,9 +435,12 @@ bool SimulatedSegmenterOptions::IsValid(std::string* error) const {
       {"bleed_prob", bleed_prob, 0, 1},
       {"bleed_fraction_max", bleed_fraction_max, 0, 1},
       {"bleed_blob_prob", bleed_blob_prob, 0, 1},
+      {"neighbour_bleed_prob", neighbour_bleed_prob, 0, 1},
+      {"neighbour_bleed_fraction_max", neighbour_bleed_fraction_max, 0, 1},
       {"boundary_jitter_fraction", boundary_jitter_fraction, 0, 1},
       {"boundary_jitter_px", boundary_jitter_px, 0, 100},
       {"boundary_jitter_scale_fraction", boundary_jitter_scale_fraction, 1e-9, 10},
+      {"mask_resolution", static_cast<double>(mask_resolution), 0, 1000},
       {"confusion_prob", confusion_prob, 0, 1},
       {"false_positives_per_frame", false_positives_per_frame, 0, 100},
       {"false_positive_area_min", false_positive_area_min, 1e-9, 1},
@@ -465,7 +507,8 @@ SimulatedFrame SimulateSegmentation(const SimulatedSegmenterOptions& options, st
 
     // Persistent difficulty of this instance (the same in every frame).
     Rng difficulty_rng(seed, -1, gt.id, kStreamDifficulty);
-    const double difficulty = o.difficulty_sd * difficulty_rng.Normal();
+    const double difficulty = o.difficulty_sd * difficulty_rng.Normal() +
+                              (IsHardCategory(info->category_id) ? o.hard_category_difficulty : 0.0);
     const double magnitude = std::exp(0.5 * difficulty);
 
     // Missed? A fresh draw per frame: flicker.
@@ -494,7 +537,9 @@ SimulatedFrame SimulateSegmentation(const SimulatedSegmenterOptions& options, st
     const double jitter_px =
         std::min(o.boundary_jitter_px, o.boundary_jitter_fraction * sqrt_area) * magnitude;
     const double jitter_scale_px = std::max(2.0, o.boundary_jitter_scale_fraction * sqrt_area);
-    const int pad = static_cast<int>(std::ceil(std::max(bleed_px, blob_px) + 2.0 * jitter_px)) + 2;
+    const double neighbour_reach_px = o.neighbour_bleed_fraction_max * sqrt_area * magnitude;
+    const int pad = static_cast<int>(std::ceil(std::max({bleed_px, blob_px, neighbour_reach_px}) +
+                                               2.0 * jitter_px)) + 2;
     const cv::Rect box = cv::Rect(gt.x0 - pad, gt.y0 - pad, gt.x1 - gt.x0 + 1 + 2 * pad,
                                   gt.y1 - gt.y0 + 1 + 2 * pad) &
                          cv::Rect(0, 0, size.width, size.height);
@@ -504,6 +549,9 @@ SimulatedFrame SimulateSegmentation(const SimulatedSegmenterOptions& options, st
     cv::Mat mask = truth.clone();
     const cv::Point gt_origin(gt.x0 - box.x, gt.y0 - box.y);
     const cv::Size gt_size(gt.x1 - gt.x0 + 1, gt.y1 - gt.y0 + 1);
+
+    // The mask head's fixed resolution.
+    if (o.mask_resolution > 0) CoarsenToGrid(cv::Rect(gt_origin, gt_size), o.mask_resolution, &mask);
 
     // Missing parts: holes.
     Rng holes_rng(seed, frame_index, gt.id, kStreamHoles);
@@ -549,6 +597,21 @@ SimulatedFrame SimulateSegmentation(const SimulatedSegmenterOptions& options, st
         const int axis = static_cast<int>(std::lround(std::max(2.0, reach)));
         cv::ellipse(mask, shifted, cv::Size(axis, std::max(1, axis / 2)), angle * 180 / M_PI, 0,
                     360, 1, cv::FILLED);
+      }
+    }
+    // Oversized: spread into touching instances.
+    Rng neighbour_rng(seed, frame_index, gt.id, kStreamNeighbourBleed);
+    if (neighbour_rng.Bernoulli(o.neighbour_bleed_prob)) {
+      const int radius = static_cast<int>(
+          std::lround(neighbour_rng.Uniform(1.0 / 3.0, 1.0) * neighbour_reach_px));
+      if (radius > 0) {
+        cv::Mat others, reach;
+        cv::compare(gt_ids(box), 0, others, cv::CMP_NE);
+        others &= ~(truth * 255);
+        const cv::Mat kernel =
+            cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * radius + 1, 2 * radius + 1));
+        cv::dilate(truth, reach, kernel);
+        mask |= reach & (others / 255);
       }
     }
     // Jittered boundary.

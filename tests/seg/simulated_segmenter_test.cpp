@@ -222,6 +222,102 @@ TEST(SimulatedSegmenterTest, BleedingAddsPixelsOutsideTheInstance) {
   EXPECT_GT(into_neighbour, 0);  // car 2 and truck 3 are 5 px apart
 }
 
+TEST(SimulatedSegmenterTest, NeighbourBleedSpreadsOnlyIntoTouchingInstances) {
+  // A car (2) with a cup (4) resting against its top edge, a person (1) alone.
+  cv::Mat ids(kHeight, kWidth, CV_16U, cv::Scalar(0));
+  cv::rectangle(ids, cv::Rect(70, 60, 60, 30), 2, cv::FILLED);
+  cv::rectangle(ids, cv::Rect(90, 50, 10, 10), 4, cv::FILLED);
+  cv::ellipse(ids, cv::Point(30, 60), cv::Size(12, 30), 0, 0, 360, 1, cv::FILLED);
+  SimulatedSegmenterOptions options = Clean();
+  options.neighbour_bleed_prob = 1;
+  options.neighbour_bleed_fraction_max = 0.5;
+  const SimulatedFrame out = SimulateSegmentation(options, 3, 0, ids, TestTable(), {});
+  ASSERT_EQ(out.gt_ids.size(), 3u);
+  for (size_t i = 0; i < out.gt_ids.size(); ++i) {
+    const cv::Mat gt = GtMask(ids, out.gt_ids[i]);
+    const cv::Mat& m = out.segmentation.instances[i].mask;
+    SCOPED_TRACE("instance " + std::to_string(out.gt_ids[i]));
+    EXPECT_EQ(cv::countNonZero(gt & ~m & 1), 0) << "spreading removed pixels";
+    cv::Mat background;
+    cv::compare(ids, 0, background, cv::CMP_EQ);
+    EXPECT_EQ(cv::countNonZero(m & (background / 255)), 0) << "spread onto the background";
+    const int added = cv::countNonZero(m) - cv::countNonZero(gt);
+    if (out.gt_ids[i] == 1) {
+      EXPECT_EQ(added, 0);  // touches nothing
+    } else if (out.gt_ids[i] == 2) {
+      // The car (sqrt(area) ~42 px) reaches 7 to 21 px into the cup, which is 10 px tall.
+      EXPECT_GE(added, 70);
+    } else {
+      EXPECT_GT(added, 0);  // the cup, into the car below it
+    }
+  }
+}
+
+TEST(SimulatedSegmenterTest, CoarseMaskHeadLosesThinPartsOfLargeInstancesOnly) {
+  // A large person with a 1-px thin arm, and a small cup with a 1-px notch.
+  cv::Mat ids(kHeight, kWidth, CV_16U, cv::Scalar(0));
+  cv::rectangle(ids, cv::Rect(20, 20, 60, 80), 1, cv::FILLED);
+  cv::rectangle(ids, cv::Rect(80, 50, 40, 1), 1, cv::FILLED);
+  cv::rectangle(ids, cv::Rect(130, 20, 12, 12), 4, cv::FILLED);
+  ids.at<std::uint16_t>(20, 136) = 0;
+  SimulatedSegmenterOptions options = Clean();
+  options.mask_resolution = 21;
+  const SimulatedFrame out = SimulateSegmentation(options, 1, 0, ids, TestTable(), {});
+  ASSERT_EQ(out.gt_ids.size(), 2u);
+  for (size_t i = 0; i < out.gt_ids.size(); ++i) {
+    const cv::Mat gt = GtMask(ids, out.gt_ids[i]);
+    const cv::Mat& m = out.segmentation.instances[i].mask;
+    if (out.gt_ids[i] == 4) {
+      EXPECT_TRUE(SameMask(m, gt)) << "a 12-px instance is finer than the 21-cell grid";
+    } else {
+      // A grid cell is 100/21 ~ 4.8 px wide and 82/21 ~ 3.9 px tall: the arm is lost,
+      // the body's edges are kept to within a cell.
+      EXPECT_EQ(cv::countNonZero(m(cv::Rect(85, 48, 35, 6))), 0) << "the arm survived";
+      EXPECT_GT(Iou(m, gt), 0.9);
+    }
+  }
+  options.mask_resolution = 0;
+  const SimulatedFrame off = SimulateSegmentation(options, 1, 0, ids, TestTable(), {});
+  for (size_t i = 0; i < off.gt_ids.size(); ++i) {
+    EXPECT_TRUE(SameMask(off.segmentation.instances[i].mask, GtMask(ids, off.gt_ids[i])));
+  }
+}
+
+TEST(SimulatedSegmenterTest, HardCategoriesAreSegmentedWorse) {
+  // Twelve equal squares: six chairs (a hard category), six cups.
+  InstanceTable table;
+  cv::Mat ids(kHeight, kWidth, CV_16U, cv::Scalar(0));
+  for (int k = 0; k < 12; ++k) {
+    const std::uint16_t id = static_cast<std::uint16_t>(k + 1);
+    table.Add({id, k < 6 ? 62 : 47, "", false});
+    cv::rectangle(ids, cv::Rect(5 + (k % 6) * 26, 10 + (k / 6) * 55, 20, 20), id, cv::FILLED);
+  }
+  SimulatedSegmenterOptions options;  // fcis-like shape errors, no misses or false positives
+  options.miss_prob = options.miss_small_prob = options.miss_truncated_prob = 0;
+  options.miss_occluded_prob = options.miss_moving_prob = 0;
+  options.false_positives_per_frame = 0;
+  options.confusion_prob = 0;
+  auto mean_iou = [&](std::uint16_t first_id) {
+    double sum = 0;
+    int n = 0;
+    for (int frame = 0; frame < 40; ++frame) {
+      const SimulatedFrame out = SimulateSegmentation(options, 5, frame, ids, table, {});
+      for (size_t i = 0; i < out.gt_ids.size(); ++i) {
+        if (out.gt_ids[i] < first_id || out.gt_ids[i] >= first_id + 6) continue;
+        sum += Iou(out.segmentation.instances[i].mask, GtMask(ids, out.gt_ids[i]));
+        ++n;
+      }
+    }
+    return n > 0 ? sum / n : 0.0;
+  };
+  options.hard_category_difficulty = 0;
+  const double chairs_plain = mean_iou(1), cups_plain = mean_iou(7);
+  options.hard_category_difficulty = 1.5;
+  const double chairs_hard = mean_iou(1), cups_hard = mean_iou(7);
+  EXPECT_EQ(cups_hard, cups_plain);  // cups are not a hard category
+  EXPECT_LT(chairs_hard, chairs_plain - 0.03);
+}
+
 TEST(SimulatedSegmenterTest, JitterMovesTheBoundaryBothWays) {
   const cv::Mat ids = TestIds();
   SimulatedSegmenterOptions options = Clean();
