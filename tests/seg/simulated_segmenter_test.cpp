@@ -270,7 +270,7 @@ TEST(SimulatedSegmenterTest, CoarseMaskHeadLosesThinPartsOfLargeInstancesOnly) {
     if (out.gt_ids[i] == 4) {
       EXPECT_TRUE(SameMask(m, gt)) << "a 12-px instance is finer than the 21-cell grid";
     } else {
-      // A grid cell is 100/21 ~ 4.8 px wide and 82/21 ~ 3.9 px tall: the arm is lost,
+      // A grid cell is 100/21 ~ 4.8 px wide and 80/21 ~ 3.8 px tall: the arm is lost,
       // the body's edges are kept to within a cell.
       EXPECT_EQ(cv::countNonZero(m(cv::Rect(85, 48, 35, 6))), 0) << "the arm survived";
       EXPECT_GT(Iou(m, gt), 0.9);
