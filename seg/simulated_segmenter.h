@@ -72,9 +72,9 @@ struct SimulatedSegmenterOptions {
   // miss probability and scaling its shape errors by exp(difficulty / 2), >= 0.
   double difficulty_sd = 0.3;
   // Difficulty added to every instance of the COCO categories that mask networks segment
-  // worst (COCO mask AP of FCIS / Mask R-CNN around 0.1-0.25 against ~0.35 on average:
-  // bench, chair, couch, potted plant, dining table, book; thin legs, open shapes,
-  // cluttered tops), >= 0.
+  // worst (per-category COCO mask AP of Mask R-CNN-class models roughly 0.1-0.25 against
+  // ~0.35 on average: bench, chair, potted plant, dining table, book; thin legs, open
+  // shapes, cluttered tops), >= 0.
   double hard_category_difficulty = 1.0;
 
   // --- Missing parts ---
