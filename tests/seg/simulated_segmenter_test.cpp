@@ -468,6 +468,19 @@ TEST(SimulatedSegmenterTest, OptionsAreChecked) {
   EXPECT_FALSE(options.IsValid(&error));
   EXPECT_NE(error.find("strength"), std::string::npos) << error;
   EXPECT_THROW(Simulate(options, 0), Error);
+  // The newer fields are range-checked too, each named in its message.
+  options = SimulatedSegmenterOptions();
+  options.mask_resolution = -1;
+  EXPECT_FALSE(options.IsValid(&error));
+  EXPECT_NE(error.find("mask_resolution"), std::string::npos) << error;
+  options = SimulatedSegmenterOptions();
+  options.neighbour_bleed_prob = 2;
+  EXPECT_FALSE(options.IsValid(&error));
+  EXPECT_NE(error.find("neighbour_bleed_prob"), std::string::npos) << error;
+  options = SimulatedSegmenterOptions();
+  options.hard_category_difficulty = -0.5;
+  EXPECT_FALSE(options.IsValid(&error));
+  EXPECT_NE(error.find("hard_category_difficulty"), std::string::npos) << error;
   try {
     SimulatedSegmenterOptions::Preset("fcis");
     ADD_FAILURE() << "expected an exception";
