@@ -605,9 +605,8 @@ SimulatedFrame SimulateSegmentation(const SimulatedSegmenterOptions& options, st
       const int radius = static_cast<int>(
           std::lround(neighbour_rng.Uniform(1.0 / 3.0, 1.0) * neighbour_reach_px));
       if (radius > 0) {
-        cv::Mat others, reach;
-        cv::compare(gt_ids(box), 0, others, cv::CMP_NE);
-        others &= ~(truth * 255);
+        const cv::Mat others = (gt_ids(box) != 0) & (gt_ids(box) != gt.id);  // 0/255
+        cv::Mat reach;
         const cv::Mat kernel =
             cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * radius + 1, 2 * radius + 1));
         cv::dilate(truth, reach, kernel);
