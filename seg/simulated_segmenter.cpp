@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
 #include <numeric>
 #include <stdexcept>
@@ -240,6 +241,12 @@ cv::Point RandomPixelOf(Rng* rng, const cv::Mat& m, int count) {
   return {0, 0};
 }
 
+// Share of the full moving-miss rate for an instance's own image motion.
+double MotionBlurShare(const SimulatedInstanceContext& ctx, const SimulatedSegmenterOptions& o) {
+  if (ctx.own_image_speed_px_s < 0) return 1.0;
+  return std::min(1.0, ctx.own_image_speed_px_s / o.moving_full_miss_speed_px_s);
+}
+
 float Clamp01(double v, double lo = 0.0) {
   return static_cast<float>(std::clamp(v, lo, 1.0));
 }
@@ -309,6 +316,7 @@ std::map<std::string, double*> DoubleFields(SimulatedSegmenterOptions* o) {
           {"truncated_large_area_fraction", &o->truncated_large_area_fraction},
           {"miss_occluded_prob", &o->miss_occluded_prob},
           {"miss_moving_prob", &o->miss_moving_prob},
+          {"moving_full_miss_speed_px_s", &o->moving_full_miss_speed_px_s},
           {"difficulty_sd", &o->difficulty_sd},
           {"hard_category_difficulty", &o->hard_category_difficulty},
           {"hole_prob", &o->hole_prob},
@@ -425,6 +433,7 @@ bool SimulatedSegmenterOptions::IsValid(std::string* error) const {
       {"miss_occluded_prob", miss_occluded_prob, 0, 1},
       {"occlusion_window", static_cast<double>(occlusion_window), 0, inf},
       {"miss_moving_prob", miss_moving_prob, 0, 1},
+      {"moving_full_miss_speed_px_s", moving_full_miss_speed_px_s, 1e-9, inf},
       {"difficulty_sd", difficulty_sd, 0, 10},
       {"hard_category_difficulty", hard_category_difficulty, 0, 10},
       {"hole_prob", hole_prob, 0, 1},
@@ -525,7 +534,7 @@ SimulatedFrame SimulateSegmentation(const SimulatedSegmenterOptions& options, st
     const double occlusion = 1.0 - std::clamp(ctx.visible_share, 0.0, 1.0);
     double p_miss = o.miss_prob + o.miss_small_prob * small_share +
                     o.miss_truncated_prob * truncation + o.miss_occluded_prob * occlusion +
-                    (ctx.moving ? o.miss_moving_prob : 0.0);
+                    (ctx.moving ? o.miss_moving_prob * MotionBlurShare(ctx, o) : 0.0);
     p_miss = std::clamp(p_miss, 0.0, 1.0);
     if (p_miss > 0 && p_miss < 1) p_miss = Logistic(Logit(p_miss) + difficulty);
     Rng miss_rng(seed, frame_index, gt.id, kStreamMiss);
@@ -715,8 +724,41 @@ SimulatedFrame SimulateSegmentation(const SimulatedSegmenterOptions& options, st
   return result;
 }
 
+double OwnImageSpeedPxPerS(const Eigen::Isometry3d& T_wc, const PinholeCamera& camera,
+                           const TrackSample& now, const TrackSample& next) {
+  const double dt = next.stamp_s - now.stamp_s;
+  if (!(dt > 0)) return -1.0;
+  const Eigen::Isometry3d T_cw = T_wc.inverse();
+  const Eigen::Vector3d a = T_cw * now.T_world_object.translation();
+  const Eigen::Vector3d b = T_cw * next.T_world_object.translation();
+  constexpr double kMinDepthM = 0.1;
+  if (a.z() < kMinDepthM || b.z() < kMinDepthM) return -1.0;
+  const Eigen::Vector2d shift(camera.fx * (b.x() / b.z() - a.x() / a.z()),
+                              camera.fy * (b.y() / b.z() - a.y() / a.z()));
+  return shift.norm() / dt;
+}
+
 // ---------------------------------------------------------------------------------------
 // The segmenter over a sequence directory.
+
+namespace {
+
+// The ground-truth pose whose stamp is nearest to `stamp_s` and within `tolerance_s` of
+// it, or nullptr (generated sequences write one pose per frame, at the frame's stamp).
+const StampedPose* NearestPose(const std::vector<StampedPose>& poses, double stamp_s,
+                               double tolerance_s) {
+  auto after = std::lower_bound(poses.begin(), poses.end(), stamp_s,
+                                [](const StampedPose& p, double stamp) { return p.stamp_s < stamp; });
+  const StampedPose* best = nullptr;
+  if (after != poses.end()) best = &*after;
+  if (after != poses.begin() &&
+      (best == nullptr || stamp_s - std::prev(after)->stamp_s < best->stamp_s - stamp_s)) {
+    best = &*std::prev(after);
+  }
+  return best != nullptr && std::abs(best->stamp_s - stamp_s) <= tolerance_s ? best : nullptr;
+}
+
+}  // namespace
 
 SimulatedSegmenter::SimulatedSegmenter(const fs::path& sequence_dir,
                                        const SimulatedSegmenterOptions& options,
@@ -732,8 +774,25 @@ SimulatedSegmenter::SimulatedSegmenter(const fs::path& sequence_dir,
   table_ = InstanceTable::Read(dir_ / "instances.json");
   if (fs::exists(dir_ / "tracks.json")) {
     for (const ObjectTrack& track : ReadTracks(dir_ / "tracks.json")) {
-      auto& samples = tracks_[track.instance_id];
-      for (const TrackSample& s : track.samples) samples[s.frame] = {s.visible_pixels, s.moving};
+      auto& states = tracks_[track.instance_id];
+      for (size_t k = 0; k < track.samples.size(); ++k) {
+        const TrackSample& s = track.samples[k];
+        TrackState& state = states[s.frame];
+        state.visible_pixels = s.visible_pixels;
+        state.moving = s.moving;
+        // "moving" means between this frame and the next: the speed over the same step
+        // (the last sample has none: the step before it).
+        if (!s.moving || track.samples.size() < 2) continue;
+        const size_t from = std::min(k, track.samples.size() - 2);
+        const TrackSample& a = track.samples[from];
+        const TrackSample& b = track.samples[from + 1];
+        const StampedPose* pose =
+            NearestPose(sequence_.groundtruth(), a.stamp_s, 0.5 * (b.stamp_s - a.stamp_s));
+        if (pose != nullptr) {
+          state.own_image_speed_px_s =
+              OwnImageSpeedPxPerS(pose->T_wc, sequence_.camera().intrinsics, a, b);
+        }
+      }
     }
   }
 }
@@ -769,11 +828,13 @@ SimulatedFrame SimulatedSegmenter::SegmentWithTruth(const RgbdFrame& frame) {
     int recent_max = 0;
     for (auto it = samples.lower_bound(frame.index - options_.occlusion_window);
          it != samples.end() && it->first <= frame.index + options_.occlusion_window; ++it) {
-      recent_max = std::max(recent_max, it->second.first);
+      recent_max = std::max(recent_max, it->second.visible_pixels);
     }
     SimulatedInstanceContext ctx;
-    ctx.visible_share = recent_max > 0 ? here->second.first / static_cast<double>(recent_max) : 1.0;
-    ctx.moving = here->second.second;
+    ctx.visible_share =
+        recent_max > 0 ? here->second.visible_pixels / static_cast<double>(recent_max) : 1.0;
+    ctx.moving = here->second.moving;
+    ctx.own_image_speed_px_s = here->second.own_image_speed_px_s;
     context[id] = ctx;
   }
   return SimulateSegmentation(options_, seed_, frame.index, ids, table_, context);

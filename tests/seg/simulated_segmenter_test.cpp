@@ -179,6 +179,65 @@ TEST(SimulatedSegmenterTest, TruncatedOccludedAndMovingInstancesAreMissedMoreOft
   EXPECT_LT(moving_truck, 50);
 }
 
+TEST(SimulatedSegmenterTest, MovingInstancesAreMissedInProportionToTheirOwnImageSpeed) {
+  SimulatedSegmenterOptions options = Clean();
+  options.miss_moving_prob = 1;
+  options.moving_full_miss_speed_px_s = 200;
+  auto found_of_100 = [&](double speed_px_s) {
+    SimulatedInstanceContext moving_truck;
+    moving_truck.moving = true;
+    moving_truck.own_image_speed_px_s = speed_px_s;
+    int found = 0;
+    for (int frame = 0; frame < 100; ++frame) {
+      const auto ids =
+          SimulateSegmentation(options, 1, frame, TestIds(), TestTable(), {{3, moving_truck}}).gt_ids;
+      found += std::count(ids.begin(), ids.end(), 3);
+    }
+    return found;
+  };
+  EXPECT_EQ(found_of_100(0), 100);     // limbs moving, the root still: no blur
+  EXPECT_EQ(found_of_100(400), 0);     // beyond the full-rate speed
+  EXPECT_EQ(found_of_100(-1), 0);      // speed unknown: the full rate
+  const int half = found_of_100(100);  // p = 0.5
+  EXPECT_GT(half, 30);
+  EXPECT_LT(half, 70);
+}
+
+TEST(SimulatedSegmenterTest, OwnImageSpeedLeavesTheCameraMotionOut) {
+  PinholeCamera camera;
+  camera.fx = 500;
+  camera.fy = 400;
+  camera.cx = 320;
+  camera.cy = 240;
+  camera.width = 640;
+  camera.height = 480;
+  TrackSample now, next;
+  now.stamp_s = 2.0;
+  next.stamp_s = 2.2;
+  // Camera at (1, 2, 3) looking along world +z; the object 5 m ahead moves 0.2 m down the
+  // camera's y axis in 0.2 s: fy * 0.2 / 5 = 16 px in 0.2 s.
+  Eigen::Isometry3d T_wc = Eigen::Isometry3d::Identity();
+  T_wc.translation() = Eigen::Vector3d(1, 2, 3);
+  now.T_world_object.translation() = Eigen::Vector3d(1, 2, 8);
+  next.T_world_object.translation() = Eigen::Vector3d(1, 2.2, 8);
+  EXPECT_NEAR(OwnImageSpeedPxPerS(T_wc, camera, now, next), 80.0, 1e-9);
+  // The same step seen by a camera turned 90 degrees about its y axis (looking along
+  // world +x): the object must be in front, so put it 4 m along +x; its motion is then
+  // along the image's y axis again: fy * 0.2 / 4 / 0.2 s = 100 px/s.
+  T_wc.linear() = Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  now.T_world_object.translation() = Eigen::Vector3d(5, 2, 3);
+  next.T_world_object.translation() = Eigen::Vector3d(5, 2.2, 3);
+  EXPECT_NEAR(OwnImageSpeedPxPerS(T_wc, camera, now, next), 100.0, 1e-9);
+  // Moving straight along the ray through the principal point: no image motion.
+  next.T_world_object.translation() = Eigen::Vector3d(6, 2, 3);
+  EXPECT_NEAR(OwnImageSpeedPxPerS(T_wc, camera, now, next), 0.0, 1e-9);
+  // Behind the camera, or no time step: unknown.
+  next.T_world_object.translation() = Eigen::Vector3d(-5, 2, 3);
+  EXPECT_LT(OwnImageSpeedPxPerS(T_wc, camera, now, next), 0);
+  next = now;
+  EXPECT_LT(OwnImageSpeedPxPerS(T_wc, camera, now, next), 0);
+}
+
 TEST(SimulatedSegmenterTest, MissingPartsOnlyRemovePixels) {
   const cv::Mat ids = TestIds();
   for (const char* mode : {"holes", "cut"}) {
@@ -478,6 +537,10 @@ TEST(SimulatedSegmenterTest, OptionsAreChecked) {
   EXPECT_FALSE(options.IsValid(&error));
   EXPECT_NE(error.find("neighbour_bleed_prob"), std::string::npos) << error;
   options = SimulatedSegmenterOptions();
+  options.moving_full_miss_speed_px_s = 0;
+  EXPECT_FALSE(options.IsValid(&error));
+  EXPECT_NE(error.find("moving_full_miss_speed_px_s"), std::string::npos) << error;
+  options = SimulatedSegmenterOptions();
   options.hard_category_difficulty = -0.5;
   EXPECT_FALSE(options.IsValid(&error));
   EXPECT_NE(error.find("hard_category_difficulty"), std::string::npos) << error;
@@ -580,6 +643,38 @@ TEST_F(SimulatedSegmenterSequenceTest, TracksMakeOccludedInstancesHarder) {
   EXPECT_TRUE(has(segmenter.SegmentWithTruth(sequence.LoadFrame(0)), 2));
   EXPECT_FALSE(has(segmenter.SegmentWithTruth(sequence.LoadFrame(1)), 2));
   EXPECT_TRUE(has(segmenter.SegmentWithTruth(sequence.LoadFrame(1)), 3));
+}
+
+TEST_F(SimulatedSegmenterSequenceTest, OnlyFastMovingInstancesAreBlurredAway) {
+  // Both flagged moving in every frame; 2 keeps its root still (a sitting person moving
+  // an arm), 3 crosses the view 2 m in front of the camera (at identity) at 1 m/s.
+  std::vector<ObjectTrack> tracks(2);
+  tracks[0].instance_id = 2;
+  tracks[1].instance_id = 3;
+  for (int i = 0; i < kFrames; ++i) {
+    TrackSample s;
+    s.frame = i;
+    s.stamp_s = 1.0 + 0.1 * i;
+    s.moving = true;
+    s.visible_pixels = 500;
+    s.T_world_object.translation() = Eigen::Vector3d(0, 0, 2);
+    tracks[0].samples.push_back(s);
+    s.T_world_object.translation() = Eigen::Vector3d(0.1 * i, 0, 2);
+    tracks[1].samples.push_back(s);
+  }
+  WriteTracks(dir_ / "tracks.json", tracks);
+  SimulatedSegmenterOptions options = Clean();
+  options.miss_moving_prob = 1;
+  // fx * 1 m/s / 2 m = fx / 2 px/s: well over this.
+  options.moving_full_miss_speed_px_s = 10;
+  SimulatedSegmenter segmenter(dir_, options, 5);
+  const TumSequence sequence = TumSequence::Open(dir_);
+  ASSERT_GT(sequence.camera().intrinsics.fx / 2, 10.0);
+  for (int i = 0; i < kFrames; ++i) {
+    const SimulatedFrame f = segmenter.SegmentWithTruth(sequence.LoadFrame(i));
+    EXPECT_EQ(std::count(f.gt_ids.begin(), f.gt_ids.end(), 2), 1) << "frame " << i;
+    EXPECT_EQ(std::count(f.gt_ids.begin(), f.gt_ids.end(), 3), 0) << "frame " << i;
+  }
 }
 
 TEST_F(SimulatedSegmenterSequenceTest, BadMasksGiveClearErrors) {
