@@ -17,6 +17,7 @@ namespace segslam::scenes {
 namespace {
 
 constexpr double kCurbHeightM = 0.15;
+constexpr double kSlotLengthM = 7.0;    // parking slot pitch along the curb
 constexpr double kGroundFloorM = 4.2;  // shop floor height
 constexpr double kFloorM = 3.2;        // upper floor height
 constexpr double kBayM = 3.3;          // window bay width
@@ -357,9 +358,9 @@ class CityBuilder {
       // Parking slots along the curb, heading with the traffic on that side.
       const Vec2 heading = side > 0 ? d : Vec2(-d);
       const bool on_route = OnRoute(a, b);
-      for (double t = clear + 1.0; t + 7.0 <= block_ - clear + 2.0; t += 7.0) {
+      for (double t = clear + 1.0; t + kSlotLengthM <= block_ - clear + 2.0; t += kSlotLengthM) {
         Slot slot;
-        slot.centre = pa + d * (t + 3.5) + r * side * curb_car_;
+        slot.centre = pa + d * (t + kSlotLengthM / 2) + r * side * curb_car_;
         slot.yaw = YawOf(heading);
         slot.on_route = on_route;
         slots_.push_back(slot);
@@ -558,6 +559,7 @@ class CityBuilder {
 
     // Pass 1 cars.
     std::vector<int> ids;
+    std::vector<const Slot*> own_slots;
     for (int k = 0; k < spec_.parked_cars; ++k) {
       const Slot* slot = take_slot();
       if (slot == nullptr) break;
@@ -566,13 +568,28 @@ class CityBuilder {
       o.placement[0].T_world_object = pose_of(*slot);
       o.placement[1] = o.placement[0];
       ids.push_back(static_cast<int>(world_.objects.size()) - 1);
+      own_slots.push_back(slot);
     }
-    // Pass 2: relocate to a free slot, remove, add.
+    // Pass 2: relocate (to a free slot, or within the car's own), remove, add.
     const ChangePlan plan = PlanSecondPass(static_cast<int>(ids.size()), s_.pass2, rng);
+    const double shift_m = s_.pass2.relocated_shift_m;
     for (int k : plan.relocated) {
+      Object& car = world_.objects[ids[k]];
+      if (shift_m > 0) {
+        double half_length, half_width;
+        VehicleSize(car.category_name, &half_length, &half_width);
+        constexpr double kClearanceM = 0.15;  // kept to the neighbouring slots' cars
+        const double room = std::max(0.0, kSlotLengthM / 2 - half_length - kClearanceM);
+        const double shift = std::min(room, Uniform(rng, 0.5, 1.0) * shift_m) * (Chance(rng, 0.5) ? 1.0 : -1.0);
+        const Slot& slot = *own_slots[k];
+        Slot moved = slot;
+        moved.centre += shift * Vec2(std::cos(slot.yaw), std::sin(slot.yaw));
+        car.placement[1].T_world_object = pose_of(moved);
+        continue;
+      }
       const Slot* slot = take_slot();
       if (slot == nullptr) break;
-      world_.objects[ids[k]].placement[1].T_world_object = pose_of(*slot);
+      car.placement[1].T_world_object = pose_of(*slot);
     }
     for (int k : plan.removed) world_.objects[ids[k]].placement[1].present = false;
     for (int k = 0; k < s_.pass2.added; ++k) {

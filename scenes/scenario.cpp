@@ -115,6 +115,7 @@ class FieldTable {
 
     SecondPassSpec& p = s->pass2;
     Add("pass2.relocated_share", Double(&p.relocated_share, Closed(0, 1), "pass2.relocated_share"));
+    Add("pass2.relocated_shift_m", Double(&p.relocated_shift_m, Closed(0, 3), "pass2.relocated_shift_m"));
     Add("pass2.removed_share", Double(&p.removed_share, Closed(0, 1), "pass2.removed_share"));
     Add("pass2.added", Int(&p.added, 0, 200, "pass2.added"));
     Add("pass2.camera_offset_m", Vec3(&p.camera_offset_m, Closed(-5, 5), "pass2.camera_offset_m"));
@@ -403,6 +404,10 @@ Scenario ParseScenario(const std::string& yaml_text, const std::string& origin) 
     throw KeyError(origin, "pass2.removed_share",
                    "relocated_share + removed_share must be <= 1 (got " +
                        Num(s.pass2.relocated_share + s.pass2.removed_share) + ")");
+  }
+  if (s.kind != "city" && s.pass2.relocated_shift_m > 0) {
+    throw KeyError(origin, "pass2.relocated_shift_m",
+                   "applies to city scenarios only (this one is '" + s.kind + "'); leave it 0");
   }
   if (s.kind == "city" && s.city.road_width_m + 2 * s.city.sidewalk_width_m + 8 > s.city.block_size_m) {
     throw KeyError(origin, "city.block_size_m",

@@ -32,6 +32,11 @@ struct SensorSpec {
 // The changes of pass 2 relative to pass 1.
 struct SecondPassSpec {
   double relocated_share = 0.3;  // share of parked cars / moveable objects moved, [0, 1]
+  // City only. 0: a relocated car is parked again in a free slot elsewhere. > 0: in its
+  // own slot, moved along the curb by 0.5 to 1 times this (either way; at most what the
+  // gap to the neighbouring slots allows, so trucks hardly move): a resident's car back
+  // in front of the house, the case where its old map points still match, [0, 3] m.
+  double relocated_shift_m = 0.0;
   double removed_share = 0.1;    // share removed, [0, 1]
   int added = 2;                 // new parked / moveable objects
   Eigen::Vector3d camera_offset_m{0.0, 0.0, 0.0};  // offset of the route, route frame

@@ -108,6 +108,32 @@ TEST(CityTest, SecondPassChangesMatchShares) {
   }
 }
 
+TEST(CityTest, RelocatedShiftKeepsCarsInTheirSlotsMovedAlongTheCurb) {
+  Scenario s = SmallCityScenario();
+  s.pass2.relocated_shift_m = 1.0;
+  const World w = BuildWorld(s);
+  const SecondPassChanges& c = w.pass2_changes;
+  ASSERT_FALSE(c.relocated.empty());
+  int moved = 0;
+  for (std::uint16_t id : c.relocated) {
+    const Object& o = w.objects[id - 1];
+    const Eigen::Isometry3d& a = o.placement[0].T_world_object;
+    const Eigen::Isometry3d& b = o.placement[1].T_world_object;
+    const Eigen::Vector3d shift = b.translation() - a.translation();
+    // Along the car's heading (its x axis; the slot's yaw jitters by 0.03 rad per pass).
+    const Eigen::Vector3d heading = a.linear().col(0);
+    EXPECT_NEAR(shift.z(), 0.0, 1e-9) << o.category_name;
+    EXPECT_LT((shift - shift.dot(heading) * heading).norm(), 0.05 * shift.norm() + 1e-9) << o.category_name;
+    // At most the option, and never into the next slot: 7 m pitch, 0.15 m clearance.
+    const double half_length = o.category_name == "truck" ? 3.6 : 2.45;
+    EXPECT_LE(shift.norm(), std::min(1.0, 3.5 - half_length - 0.15) + 1e-9) << o.category_name;
+    moved += shift.norm() >= 0.5 - 1e-9;
+  }
+  EXPECT_GT(moved, 0);  // the cars (not trucks) move at least half the option
+  // Everything but the relocated cars' pass-2 poses is the default world.
+  EXPECT_EQ(c.relocated, SmallCity().pass2_changes.relocated);
+}
+
 TEST(CityTest, ObjectsHaveCocoIdsAndUniqueInstanceIds) {
   const World& w = SmallCity();
   std::set<int> ids;
