@@ -3,6 +3,7 @@
 #include "core/error.h"
 #include "harness/commands.h"
 #include "harness/interrupt.h"
+#include "segslam_version.h"  // generated at build time: SEGSLAM_VERSION
 
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>

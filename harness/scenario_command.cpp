@@ -37,6 +37,7 @@
 #include "harness/scenario_runner.h"
 #include "scenes/scenario.h"
 #include "sim/dataset_generator.h"
+#include "segslam_version.h"  // generated at build time: SEGSLAM_VERSION
 
 namespace segslam::harness {
 namespace {

@@ -17,6 +17,7 @@
 #include "harness/scenario_runner.h"
 #include "harness/sweep.h"
 #include "scenes/scenario.h"
+#include "segslam_version.h"  // generated at build time: SEGSLAM_VERSION
 
 namespace segslam::harness {
 namespace {
