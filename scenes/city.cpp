@@ -17,7 +17,7 @@ namespace segslam::scenes {
 namespace {
 
 constexpr double kCurbHeightM = 0.15;
-constexpr double kSlotLengthM = 7.0;    // parking slot pitch along the curb
+constexpr double kSlotLengthM = 7.0;   // parking slot pitch along the curb
 constexpr double kGroundFloorM = 4.2;  // shop floor height
 constexpr double kFloorM = 3.2;        // upper floor height
 constexpr double kBayM = 3.3;          // window bay width
