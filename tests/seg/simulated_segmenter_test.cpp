@@ -528,22 +528,18 @@ TEST(SimulatedSegmenterTest, OptionsAreChecked) {
   EXPECT_NE(error.find("strength"), std::string::npos) << error;
   EXPECT_THROW(Simulate(options, 0), Error);
   // The newer fields are range-checked too, each named in its message.
-  options = SimulatedSegmenterOptions();
-  options.mask_resolution = -1;
-  EXPECT_FALSE(options.IsValid(&error));
-  EXPECT_NE(error.find("mask_resolution"), std::string::npos) << error;
-  options = SimulatedSegmenterOptions();
-  options.neighbour_bleed_prob = 2;
-  EXPECT_FALSE(options.IsValid(&error));
-  EXPECT_NE(error.find("neighbour_bleed_prob"), std::string::npos) << error;
-  options = SimulatedSegmenterOptions();
-  options.moving_full_miss_speed_px_s = 0;
-  EXPECT_FALSE(options.IsValid(&error));
-  EXPECT_NE(error.find("moving_full_miss_speed_px_s"), std::string::npos) << error;
-  options = SimulatedSegmenterOptions();
-  options.hard_category_difficulty = -0.5;
-  EXPECT_FALSE(options.IsValid(&error));
-  EXPECT_NE(error.find("hard_category_difficulty"), std::string::npos) << error;
+  auto expect_refused = [](const std::string& assignment) {
+    SimulatedSegmenterOptions refused;
+    refused.Set(assignment);
+    std::string message;
+    EXPECT_FALSE(refused.IsValid(&message)) << assignment;
+    const std::string field = assignment.substr(0, assignment.find('='));
+    EXPECT_NE(message.find(field), std::string::npos) << message;
+  };
+  expect_refused("mask_resolution=-1");
+  expect_refused("neighbour_bleed_prob=2");
+  expect_refused("moving_full_miss_speed_px_s=0");
+  expect_refused("hard_category_difficulty=-0.5");
   try {
     SimulatedSegmenterOptions::Preset("fcis");
     ADD_FAILURE() << "expected an exception";
