@@ -22,6 +22,11 @@ constexpr double kGroundFloorM = 4.2;  // shop floor height
 constexpr double kFloorM = 3.2;        // upper floor height
 constexpr double kBayM = 3.3;          // window bay width
 constexpr int kFacadeFloors = 3, kFacadeBays = 4;
+constexpr double kStopLineM = 4.0;          // stop line, from the far edge of the crossing road
+constexpr double kCameraToBumperM = 2.0;    // camera car: from the camera to its front bumper
+constexpr double kQueueGapM = 2.0;          // bumper to bumper, standing in a queue
+constexpr double kCarAccelMps2 = 2.0;       // braking and pulling away at a red light
+constexpr double kReactionS = 1.0;          // the camera car starts this long after the car ahead
 
 using Vec2 = Eigen::Vector2d;
 using Vec3 = Eigen::Vector3d;
@@ -64,6 +69,7 @@ class CityBuilder {
     world_.sky_rgb = Eigen::Vector3f(0.62f, 0.74f, 0.9f);
     MakeLook();
     PlanRoute();
+    PlanRedLights();
     MakeGround();
     MakeBlocks();
     MakeStreets();
@@ -233,6 +239,74 @@ class CityBuilder {
     const double seg = lane_s_[i] - lane_s_[i - 1];
     const double u = seg > 0 ? (s - lane_s_[i - 1]) / seg : 0;
     return lane_pts_[i - 1] + u * (lane_pts_[i] - lane_pts_[i - 1]);
+  }
+
+  // ---- Red lights and the camera's timing -------------------------------------------------
+  // A light where the camera car stands: behind the stop line, or behind a vehicle
+  // standing at it.
+  struct RedLight {
+    std::size_t node = 0;          // index into nodes_
+    Vec2 arrive;                   // direction the camera arrives in
+    double camera_stop_s = 0;      // camera arc length where it stands
+    double stand_from_s = 0, stand_until_s = 0;  // on the pass clock
+    std::string lead_kind;         // vehicle it waits behind; empty: first in line
+    double lead_half_length = 0;
+  };
+
+  // Stop line on the camera's lane before node k, arriving in direction a.
+  Vec2 StopLinePoint(std::size_t k, const Vec2& a) const {
+    return NodePos(nodes_[k]) - a * (road_ / 2 + kStopLineM) + Right(a) * lane_;
+  }
+
+  void PlanRedLights() {
+    red_lights_.clear();
+    camera_halts_.clear();
+    if (spec_.red_lights <= 0) return;
+    std::mt19937_64 rng = Rng("red_lights");
+    const Vec2 dirs[4] = {Vec2(1, 0), Vec2(0, 1), Vec2(-1, 0), Vec2(0, -1)};
+    const Poly2 lane(lane_pts_);
+    // Candidates: every intersection the camera reaches with room to brake before it and
+    // to see the scene after it.
+    std::vector<RedLight> candidates;
+    for (std::size_t k = 1; k < nodes_.size(); ++k) {
+      RedLight r;
+      r.node = k;
+      r.arrive = dirs[dirs_[k]];
+      r.camera_stop_s = lane.Closest(StopLinePoint(k, r.arrive) - r.arrive * kCameraToBumperM);
+      if (r.camera_stop_s >= 40.0 && r.camera_stop_s <= lane_s_.back() - 15.0) candidates.push_back(r);
+    }
+    const int n = std::min(spec_.red_lights, static_cast<int>(candidates.size()));
+    for (int i = 0; i < n; ++i) {
+      RedLight r = candidates[(2 * i + 1) * candidates.size() / (2 * n)];  // spread over the route
+      if (i % 2 == 0) {
+        r.lead_kind = VehicleKind(rng, /*allow_bus=*/true);
+        double half_width;
+        VehicleSize(r.lead_kind, &r.lead_half_length, &half_width);
+        r.camera_stop_s -= 2 * r.lead_half_length + kQueueGapM;
+      }
+      camera_halts_.push_back({r.camera_stop_s, spec_.red_light_s});
+      red_lights_.push_back(r);
+    }
+    for (RedLight& r : red_lights_) {
+      r.stand_from_s = CameraTimeAt(r.camera_stop_s);
+      r.stand_until_s = r.stand_from_s + spec_.red_light_s;
+    }
+  }
+
+  // Camera arc length at time t of a pass (both passes keep the same timing).
+  double CameraArc(double t) const {
+    return DistanceWithHalts(0.0, spec_.camera_speed_mps, camera_halts_, kCarAccelMps2, t);
+  }
+
+  // First time the camera reaches arc length s.
+  double CameraTimeAt(double s) const {
+    double lo = 0.0, hi = s / spec_.camera_speed_mps;
+    for (const Halt& h : camera_halts_) hi += h.wait_s + spec_.camera_speed_mps / kCarAccelMps2;
+    for (int i = 0; i < 60; ++i) {
+      const double mid = 0.5 * (lo + hi);
+      (CameraArc(mid) >= s - 1e-9 ? hi : lo) = mid;
+    }
+    return hi;
   }
 
   // ---- Static scenery ----------------------------------------------------------------
@@ -804,6 +878,54 @@ class CityBuilder {
     *half_width = kind == "bus" ? 1.3 : kind == "truck" ? 1.2 : 1.0;
   }
 
+  // The vehicles the camera waits behind at red lights. Each comes along the camera's
+  // lane ahead of it at the camera's speed, stands at the stop line from a few seconds
+  // before the camera stands behind it, pulls away kReactionS before the camera does,
+  // and leaves the route at that intersection (straight on where the camera turns,
+  // right where it goes straight), so no two of them meet in the camera's lane.
+  void MakeRedLightLeads(const std::vector<Node>& fnodes) {
+    std::mt19937_64 rng = Rng("red_light_leads");
+    const double v = spec_.camera_speed_mps;
+    for (const RedLight& r : red_lights_) {
+      if (r.lead_kind.empty()) continue;
+      Object& o = b_.AddObject(r.lead_kind);
+      o.parts.push_back(MakeVehicle(rng, o.category_name));
+      const int index = static_cast<int>(world_.objects.size()) - 1;
+      // Straight lead-in long enough that the start offset stays on the path.
+      const double ext_before = v * r.stand_from_s + 200.0;
+      const Poly2 lane(NodeLane(fnodes, lane_, ext_before, 300.0));
+      const Vec2 stop_line = StopLinePoint(r.node, r.arrive);
+      const double stop_arc = lane.Closest(stop_line);
+      std::vector<Vec2> pts;
+      for (std::size_t i = 0; i < lane.p.size() && lane.c[i] < stop_arc; ++i) pts.push_back(lane.p[i]);
+      pts.push_back(stop_line);
+      const bool camera_turns = r.node + 1 < nodes_.size() && dirs_[r.node + 1] != dirs_[r.node];
+      const Vec2 node = NodePos(nodes_[r.node]);
+      if (camera_turns) {
+        pts.push_back(node + Right(r.arrive) * lane_ + r.arrive * 300.0);
+      } else {
+        const Vec2 exit = Right(r.arrive);
+        const Vec2 corner = node + Right(r.arrive) * lane_ + Right(exit) * lane_;
+        pts.push_back(corner);
+        pts.push_back(corner + exit * 300.0);
+      }
+      const double stand_at = stop_arc - r.lead_half_length;  // its front at the stop line
+      double half_length, half_width;
+      VehicleSize(r.lead_kind, &half_length, &half_width);
+      PlaceMover(index, half_length, half_width, /*car=*/true, /*min_camera_m=*/3.15, 40, [&](int) {
+        PathMotion p = DrivePath(pts);
+        p.speed_mps = v;
+        p.accel_mps2 = kCarAccelMps2;
+        const double stands_from = r.stand_from_s - Uniform(rng, 1.5, 4.0);
+        const double goes_at = r.stand_until_s - kReactionS;
+        p.halts = {{stand_at, goes_at - stands_from}};
+        const double ramp_s = v / kCarAccelMps2, ramp_m = 0.5 * v * ramp_s;
+        p.start_offset_m = stand_at - ramp_m - v * (stands_from - ramp_s);
+        return p;
+      });
+    }
+  }
+
   // Moving cars on the streets of the route: ahead of the camera in its direction of
   // travel (the other lane if there are two, else its own lane, never slower than the
   // camera), oncoming in the opposite lane, and crossing at the route's intersections.
@@ -843,10 +965,19 @@ class CityBuilder {
     }
 
     // Roles in turn: ahead, oncoming, crossing, second ahead, then oncoming and crossing.
+    // A one-lane queue ahead would run into the vehicles the camera waits behind at red
+    // lights, so with those the camera's lane holds only them.
+    const bool leads = std::any_of(red_lights_.begin(), red_lights_.end(),
+                                   [](const RedLight& r) { return !r.lead_kind.empty(); });
+    const bool queue_ahead = two_lanes || !leads;
     const int n = spec_.moving_cars;
     std::vector<int> roles;
     const int pattern[] = {0, 1, 2, 0, 1, 2};
-    for (int k = 0; k < n; ++k) roles.push_back(k < 6 ? pattern[k] : 1 + k % 2);
+    for (int k = 0; k < n; ++k) {
+      const int role = k < 6 ? pattern[k] : 1 + k % 2;
+      roles.push_back(role == 0 && !queue_ahead ? 1 : role);
+    }
+    MakeRedLightLeads(fnodes);
     int ahead = 0, oncoming = 0, crossing = 0;
     const int n_oncoming = static_cast<int>(std::count(roles.begin(), roles.end(), 1));
     const int n_crossing = static_cast<int>(std::count(roles.begin(), roles.end(), 2));
@@ -896,20 +1027,33 @@ class CityBuilder {
             if (std::abs(s_meet - s_turn) < 15.0) s_meet = s_turn + (s_meet < s_turn ? -15.0 : 15.0);
           }
           const double q_meet = opposite.Closest(forward.At(f0 + s_meet));
-          p.start_offset_m = q_meet - p.speed_mps * s_meet / v_cam;
+          p.start_offset_m = q_meet - p.speed_mps * CameraTimeAt(s_meet);
           return p;
         };
       } else {
-        // Crossing: through an intersection ahead while the camera is 12-32 m before it.
+        // Crossing: through an intersection ahead while the camera is 12-32 m before it;
+        // with red lights, through one where the camera stands, while it stands.
         const int rank = crossing++;
         make = [&, rank, n_crossing](int a) {
+          if (!red_lights_.empty()) {
+            const std::size_t pick = a < 10 ? (rank + a / 3) % red_lights_.size()
+                                            : UniformInt(rng, 0, static_cast<int>(red_lights_.size()) - 1);
+            const RedLight& r = red_lights_[pick];
+            const Vec2 d = Right(r.arrive) * (Chance(rng, 0.5) ? 1.0 : -1.0);
+            const Vec2 centre = NodePos(nodes_[r.node]) + Right(d) * lane_;
+            PathMotion p = DrivePath({centre - d * ext, centre + d * ext});
+            p.speed_mps = spec_.moving_car_speed_mps * Uniform(rng, 0.85, 1.15);
+            const double t_cross = Uniform(rng, r.stand_from_s + 0.5, r.stand_until_s - 0.5);
+            p.start_offset_m = ext - p.speed_mps * t_cross;
+            return p;
+          }
           const Crossing& c = crossings[a < 10 ? (rank * crossings.size() / std::max(1, n_crossing) + a / 3) % crossings.size()
                                                : UniformInt(rng, 0, static_cast<int>(crossings.size()) - 1)];
           const Vec2 d = Right(c.arrive) * (Chance(rng, 0.5) ? 1.0 : -1.0);
           const Vec2 centre = NodePos(c.node) + Right(d) * lane_;
           PathMotion p = DrivePath({centre - d * ext, centre + d * ext});
           p.speed_mps = spec_.moving_car_speed_mps * Uniform(rng, 0.85, 1.15);
-          const double t_cross = std::max(0.0, c.s - Uniform(rng, 12.0, 32.0)) / v_cam;
+          const double t_cross = CameraTimeAt(std::max(0.0, c.s - Uniform(rng, 12.0, 32.0)));
           p.start_offset_m = ext - p.speed_mps * t_cross;
           return p;
         };
@@ -947,13 +1091,13 @@ class CityBuilder {
 
   // Pedestrians on the sidewalks of the route's streets, walking both ways, each timed to
   // be 12-30 m ahead of the camera at a time spread over the pass; crossing_share of them
-  // cross the route's street at a crosswalk ahead while the camera is 16-32 m away.
+  // cross the route's street at a crosswalk ahead while the camera is 16-32 m away, or,
+  // with red lights, over the crosswalk in front of the camera while it stands there.
   void MakePedestrians() {
     std::mt19937_64 rng = Rng("pedestrians");
     const int n = spec_.pedestrians;
     if (n <= 0) return;
     const double ext = 300.0;
-    const double v_cam = spec_.camera_speed_mps;
     const double duration = (world_.frames_per_pass[0] - 1) / s_.camera.fps;
     const Poly2 forward(NodeLane(RouteNodes(), lane_, ext, ext));
     const double f0 = ext + block_ / 2;
@@ -964,14 +1108,17 @@ class CityBuilder {
     struct Crosswalk {
       Vec2 centre, along;
       double s;
+      const RedLight* light;  // where the camera stands before it, or null
     };
     std::vector<Crosswalk> crosswalks;
     const Vec2 dirs[4] = {Vec2(1, 0), Vec2(0, 1), Vec2(-1, 0), Vec2(0, -1)};
-    for (std::size_t k = 0; k < nodes_.size(); ++k) {
+    auto crosswalk_before = [&](std::size_t k) -> Vec2 { return NodePos(nodes_[k]) - dirs[dirs_[k]] * (road_ / 2 + 2.0); };
+    for (const RedLight& r : red_lights_) crosswalks.push_back({crosswalk_before(r.node), r.arrive, 0.0, &r});
+    for (std::size_t k = 0; k < nodes_.size() && red_lights_.empty(); ++k) {
       const Vec2 a = dirs[dirs_[k]];
-      const Vec2 centre = NodePos(nodes_[k]) - a * (road_ / 2 + 2.0);
+      const Vec2 centre = crosswalk_before(k);
       const double s = forward.Closest(centre + Right(a) * lane_) - f0;
-      if (s > 24.0 && s < lane_s_.back() + 30.0) crosswalks.push_back({centre, a, s});
+      if (s > 24.0 && s < lane_s_.back() + 30.0) crosswalks.push_back({centre, a, s, nullptr});
     }
     const int crossers = crosswalks.empty() ? 0 : static_cast<int>(std::lround(spec_.crossing_share * n));
     for (int k = 0; k < n; ++k) {
@@ -990,7 +1137,8 @@ class CityBuilder {
           PathMotion p = WalkPath({from + c.along * before * leg, from, to, to + c.along * after * leg});
           p.speed_mps = speed;
           // In the middle of the street when the camera is 16-32 m before the crosswalk.
-          const double t_mid = std::max(0.0, c.s - Uniform(rng, 16.0, 32.0)) / v_cam;
+          const double t_mid = c.light ? Uniform(rng, c.light->stand_from_s + 1.0, c.light->stand_until_s - 1.0)
+                                       : CameraTimeAt(std::max(0.0, c.s - Uniform(rng, 16.0, 32.0)));
           p.start_offset_m = leg + w - speed * t_mid;
           return p;
         };
@@ -999,7 +1147,7 @@ class CityBuilder {
         make = [&, rank, walkers, speed](int a) {
           const double u = a < 10 ? (rank + Uniform(rng, 0.1, 0.9)) / walkers : Uniform(rng, 0, 1);
           const double t_meet = u * duration;
-          const double s = v_cam * t_meet + Uniform(rng, 12.0, 30.0);
+          const double s = CameraArc(t_meet) + Uniform(rng, 12.0, 30.0);
           const Vec2 along = axis_dir(forward.Tangent(f0 + s));
           Vec2 axis = forward.At(f0 + s) - Right(along) * lane_;
           if (along.x() != 0) axis.y() = block_ * std::round(axis.y() / block_);  // snap to the street line
@@ -1014,14 +1162,16 @@ class CityBuilder {
           return p;
         };
       }
-      PlaceMover(index, 0.3, 0.3, /*car=*/false, /*min_camera_m=*/4.2, 40, make);
+      // The crosswalk in front of a standing camera car is 4 m from the camera.
+      const double min_camera_m = k < crossers && !red_lights_.empty() ? 3.5 : 4.2;
+      PlaceMover(index, 0.3, 0.3, /*car=*/false, min_camera_m, 40, make);
     }
   }
 
   // ---- Camera ----------------------------------------------------------------------------
   void MakeCameraRoutes() {
     const double v = spec_.camera_speed_mps;
-    const double duration = lane_s_.back() / v;
+    const double duration = CameraTimeAt(lane_s_.back());
     const int frames = static_cast<int>(std::floor(duration * s_.camera.fps + 1e-9)) + 1;
     world_.frames_per_pass = {frames, frames};
     std::mt19937_64 rng = Rng("camera_shake");
@@ -1030,13 +1180,15 @@ class CityBuilder {
     const int keys = static_cast<int>(std::ceil(duration * s_.camera.fps)) + 1;
     for (int k = 0; k < keys; ++k) {
       const double t = std::min(duration, k / s_.camera.fps);
-      const double s = v * t;
-      // Heading from the lane tangent; a small ride shake in pitch, roll and height.
+      const double s = CameraArc(t);
+      // Heading from the lane tangent; a small ride shake in pitch, roll and height that
+      // comes from the road, so it follows the distance driven (still while standing).
+      const double road_t = s / v;
       const Vec2 fwd = (LaneAt(s + 0.5) - LaneAt(s - 0.5)).normalized();
-      const Vec3 eye = At(LaneAt(s), spec_.camera_height_m + 0.01 * bump.Eval(t));
+      const Vec3 eye = At(LaneAt(s), spec_.camera_height_m + 0.01 * bump.Eval(road_t));
       Eigen::Matrix3d R = LookAt(eye, eye + At(fwd, 0.0));
-      R = R * Eigen::AngleAxisd(0.003 * pitch.Eval(t), Vec3::UnitX()).matrix() *
-          Eigen::AngleAxisd(0.002 * roll.Eval(t), Vec3::UnitZ()).matrix();
+      R = R * Eigen::AngleAxisd(0.003 * pitch.Eval(road_t), Vec3::UnitX()).matrix() *
+          Eigen::AngleAxisd(0.002 * roll.Eval(road_t), Vec3::UnitZ()).matrix();
       CameraKey key;
       key.stamp_s = t;
       key.T_wc.linear() = R;
@@ -1085,6 +1237,8 @@ class CityBuilder {
   std::vector<Slot> slots_;
   std::vector<Sample> samples_;  // frames of both passes
   std::vector<Track> tracks_;    // placed moving actors
+  std::vector<RedLight> red_lights_;
+  std::vector<Halt> camera_halts_;  // the red lights, by camera arc length
 };
 
 }  // namespace

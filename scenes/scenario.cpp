@@ -137,6 +137,8 @@ class FieldTable {
     Add("city.pedestrian_speed_mps",
         Double(&y.pedestrian_speed_mps, Closed(0, 3), "city.pedestrian_speed_mps"));
     Add("city.crossing_share", Double(&y.crossing_share, Closed(0, 1), "city.crossing_share"));
+    Add("city.red_lights", Int(&y.red_lights, 0, 50, "city.red_lights"));
+    Add("city.red_light_s", Double(&y.red_light_s, Closed(1, 120), "city.red_light_s"));
 
     OfficeSpec& o = s->office;
     Add("office.camera_motion",

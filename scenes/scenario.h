@@ -57,6 +57,14 @@ struct CitySpec {
   int pedestrians = 10;
   double pedestrian_speed_mps = 1.3;
   double crossing_share = 0.3;  // share of pedestrians that cross streets
+  // Intersections of the route where the camera car waits at a red light (at most one
+  // per intersection, spread over the route). While it waits, cross traffic (the
+  // crossing share of moving cars) passes and the crossing pedestrians walk over the
+  // crosswalk in front of it. At the first light and every other one after it, it waits
+  // behind a vehicle (one more, not counted in moving_cars) that pulls away first when
+  // the light turns green; at the others it is first in line.
+  int red_lights = 0;
+  double red_light_s = 12.0;  // standing time at each light
 };
 
 struct OfficeSpec {

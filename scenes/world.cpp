@@ -116,6 +116,32 @@ Eigen::Vector3d CatmullRom(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1,
 
 }  // namespace
 
+double DistanceWithHalts(double start_m, double speed_mps, const std::vector<Halt>& halts, double accel_mps2,
+                         double t) {
+  const double v = speed_mps, a = accel_mps2;
+  if (v <= 0.0 || a <= 0.0) return start_m + v * t;
+  const double ramp_s = v / a, ramp_m = 0.5 * v * v / a;  // time and distance to stop from v
+  double delay_s = 0.0;  // behind the schedule of cruising straight through
+  for (const Halt& h : halts) {
+    if (h.at_m - ramp_m < start_m) continue;  // already past (or braking) at t = 0: ignored
+    const double brake_from = (h.at_m - ramp_m - start_m) / v + delay_s;
+    if (t < brake_from) break;
+    const double tau = t - brake_from;
+    if (tau < ramp_s) return h.at_m - ramp_m + v * tau - 0.5 * a * tau * tau;
+    if (tau < ramp_s + h.wait_s) return h.at_m;
+    if (tau < 2.0 * ramp_s + h.wait_s) {
+      const double go = tau - ramp_s - h.wait_s;
+      return h.at_m + 0.5 * a * go * go;
+    }
+    delay_s += h.wait_s + ramp_s;
+  }
+  return start_m + v * (t - delay_s);
+}
+
+double PathDistanceAt(const PathMotion& path, double t) {
+  return DistanceWithHalts(path.start_offset_m, path.speed_mps, path.halts, path.accel_mps2, t);
+}
+
 Eigen::Isometry3d CameraPoseAt(const World& world, Pass pass, double stamp_s) {
   const std::vector<CameraKey>& keys = world.camera_route[PassIndex(pass)].keys;
   if (keys.empty()) return Eigen::Isometry3d::Identity();
@@ -142,7 +168,7 @@ Eigen::Isometry3d ObjectPoseAt(const Object& object, Pass pass, double stamp_s) 
   const Placement& p = object.placement[PassIndex(pass)];
   if (!p.present) return Eigen::Isometry3d::Identity();
   if (!p.moving || p.path.waypoints.empty()) return p.T_world_object;
-  return PathPose(p.path, p.path.start_offset_m + p.path.speed_mps * stamp_s);
+  return PathPose(p.path, PathDistanceAt(p.path, stamp_s));
 }
 
 std::vector<Eigen::Isometry3d> PartPosesAt(const Object& object, Pass pass, double stamp_s) {
@@ -160,7 +186,7 @@ std::vector<Eigen::Isometry3d> PartPosesAt(const Object& object, Pass pass, doub
   PersonJoints joints;
   if (object.articulation == Articulation::kWalker) {
     const bool walking = p.moving && p.path.speed_mps > 0 && p.path.waypoints.size() > 1;
-    const double walked_m = walking ? p.path.speed_mps * stamp_s : 0.0;
+    const double walked_m = walking ? PathDistanceAt(p.path, stamp_s) - p.path.start_offset_m : 0.0;
     const double stride_m = kStrideLengthM * object.body_scale;
     joints = WalkJoints(walked_m / stride_m + object.gait_phase_offset, walking ? 1.0 : 0.0);
   } else {

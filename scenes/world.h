@@ -67,14 +67,35 @@ struct Part {
 // How a person's limbs move; rigid objects use kRigid.
 enum class Articulation { kRigid, kWalker, kSitter };
 
-// A polyline the object follows at constant speed, heading along the path (object +x
-// forward, z up). Closed paths loop; open paths ping-pong (turn around at the ends).
+// A stop on the way, as a car makes at a red light: the mover brakes at a constant
+// deceleration to stand still where it has travelled `at_m`, waits `wait_s`, and pulls
+// away with the same acceleration back to its cruising speed.
+struct Halt {
+  double at_m = 0.0;  // distance travelled (start offset included) where it stands
+  double wait_s = 0.0;
+};
+
+// Distance travelled at time t by a mover that starts at `start_m`, cruises at speed_mps
+// and makes `halts` (sorted by at_m; those behind start_m are ignored) braking and
+// accelerating at accel_mps2. Each halt delays the rest of the trip by wait_s +
+// speed / accel against cruising straight through. Continuous and non-decreasing in t.
+double DistanceWithHalts(double start_m, double speed_mps, const std::vector<Halt>& halts, double accel_mps2,
+                         double t);
+
+// A polyline the object follows at constant speed (but for its halts), heading along
+// the path (object +x forward, z up). Closed paths loop; open paths ping-pong (turn
+// around at the ends).
 struct PathMotion {
   std::vector<Eigen::Vector3d> waypoints;
   double speed_mps = 0.0;
   double start_offset_m = 0.0;  // arc length at t = 0
   bool closed = true;
+  std::vector<Halt> halts;  // by distance travelled, start offset included
+  double accel_mps2 = 2.0;  // braking and pulling away at halts
 };
+
+// Distance the mover has travelled along `path` at time t (start offset included).
+double PathDistanceAt(const PathMotion& path, double t);
 
 // Where an object is in one pass. Exactly one of: absent, static at T_world_object,
 // or moving along `path` (then T_world_object is ignored).

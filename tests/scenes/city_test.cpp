@@ -183,6 +183,74 @@ TEST(CityTest, CameraIsNeverInsideAGeom) {
 // Moving actors are scripted against the camera route: cars ahead, oncoming and crossing,
 // pedestrians on the route's sidewalks and crosswalks. Checked geometrically (object roots
 // in the horizontal field of view, within 40 m in front), and for clearance at frame rate.
+// Frames [first, last] over which the camera stands still, in order.
+std::vector<std::pair<int, int>> StandingStretches(const World& w, Pass pass) {
+  std::vector<std::pair<int, int>> stretches;
+  for (int f = 1; f < w.frames_per_pass[PassIndex(pass)]; ++f) {
+    const double step = (CameraPoseAt(w, pass, FrameStamp(w, f)).translation() -
+                         CameraPoseAt(w, pass, FrameStamp(w, f - 1)).translation()).norm();
+    if (step > 1e-6) continue;
+    if (!stretches.empty() && stretches.back().second == f - 1) stretches.back().second = f;
+    else stretches.push_back({f - 1, f});
+  }
+  return stretches;
+}
+
+TEST(CityTest, CameraWaitsAtRedLightsWhileTrafficAndPeopleCrossInFront) {
+  Scenario s = SmallCityScenario();
+  ApplyOverride(s, "city.route_length_m", "130");
+  ApplyOverride(s, "city.red_lights", "2");
+  ApplyOverride(s, "city.red_light_s", "6");
+  ApplyOverride(s, "city.moving_cars", "4");
+  ApplyOverride(s, "city.pedestrians", "8");
+  ApplyOverride(s, "city.crossing_share", "0.5");
+  const World w = BuildWorld(s);
+  const double v = s.city.camera_speed_mps, fps = s.camera.fps;
+  // Each light costs its standing time plus v / a (braking and pulling away at 2 m/s^2).
+  const double duration = 130.0 / v + 2 * (6.0 + v / 2.0);
+  EXPECT_NEAR(w.frames_per_pass[0], duration * fps + 1, 1.5);
+  EXPECT_NEAR(RouteLength(w, Pass::kFirst), 130.0, 2.0);
+
+  for (Pass pass : kBothPasses) {
+    const auto stretches = StandingStretches(w, pass);
+    ASSERT_EQ(stretches.size(), 2u) << PassName(pass);
+    for (std::size_t k = 0; k < stretches.size(); ++k) {
+      const auto [first, last] = stretches[k];
+      EXPECT_NEAR(last - first, 6.0 * fps, 1.5) << PassName(pass) << " light " << k;
+      const int mid = (first + last) / 2;
+      const Eigen::Isometry3d T_cw = CameraPoseAt(w, pass, FrameStamp(w, mid)).inverse();
+      // In the camera frame: x right, z ahead. What stands or moves right in front.
+      int lead_cars = 0, crossing_people = 0;
+      for (const Object& o : w.objects) {
+        const Placement& p = o.placement[PassIndex(pass)];
+        if (!p.present || !p.moving) continue;
+        const double t_mid = FrameStamp(w, mid);
+        const Eigen::Vector3d c = T_cw * ObjectPoseAt(o, pass, t_mid).translation();
+        if (o.articulation == Articulation::kWalker) {
+          bool on_crosswalk_ahead = false;
+          for (int f = first; f <= last; ++f) {
+            const Eigen::Vector3d q = T_cw * ObjectPoseAt(o, pass, FrameStamp(w, f)).translation();
+            // 4 m ahead when the camera is first in line, beyond the lead vehicle if not.
+            on_crosswalk_ahead |= q.z() > 3.0 && q.z() < 20.0 && std::abs(q.x()) < 2.0;
+          }
+          crossing_people += on_crosswalk_ahead;
+        } else if (c.z() > 3.0 && c.z() < 12.0 && std::abs(c.x()) < 1.0) {
+          // The vehicle the camera waits behind: in its lane, still while the camera
+          // stands, gone first when the light turns green.
+          ++lead_cars;
+          EXPECT_FALSE(ObjectMovesAt(o, pass, t_mid, 1.0));
+          const double green = FrameStamp(w, last);
+          EXPECT_TRUE(ObjectMovesAt(o, pass, green - 0.5, 0.2)) << "pulls away before the camera";
+          EXPECT_GT((T_cw * ObjectPoseAt(o, pass, green + 3.0).translation()).z(), c.z() + 2.0);
+        }
+      }
+      // Even lights (0, 2, ...) wait behind a vehicle, odd ones are first in line.
+      EXPECT_EQ(lead_cars, k % 2 == 0 ? 1 : 0) << PassName(pass) << " light " << k;
+      EXPECT_GE(crossing_people, 1) << PassName(pass) << " light " << k;
+    }
+  }
+}
+
 TEST(CityTest, MovingActorsAreSeenAlongTheRouteAndKeepClear) {
   const World w = BuildWorld(LoadScenario(ScenarioPath("city_two_pass.yaml")));
   const double tan_half_h = std::tan(0.5 * w.camera.fovy_deg * M_PI / 180.0) * w.camera.width / w.camera.height;

@@ -85,6 +85,8 @@ TEST(ScenarioTest, OutOfRangeNamesKeyAndValue) {
   EXPECT_EQ(ParseError("kind: office\npass2: {relocated_shift_m: 1}\n"),
             "my.yaml: pass2.relocated_shift_m: applies to city scenarios only (this one is 'office'); leave it 0");
   EXPECT_EQ(ParseError("city: {route_length_m: 5}\n"), "my.yaml: city.route_length_m: must be in [20, 2000] (got 5)");
+  EXPECT_EQ(ParseError("city: {red_lights: -1}\n"), "my.yaml: city.red_lights: must be in [0, 50] (got -1)");
+  EXPECT_EQ(ParseError("city: {red_light_s: 0.5}\n"), "my.yaml: city.red_light_s: must be in [1, 120] (got 0.5)");
   EXPECT_EQ(ParseError("kind: forest\n"), "my.yaml: kind: must be one of city, office (got 'forest')");
   EXPECT_EQ(ParseError("office: {camera_motion: spin}\n"),
             "my.yaml: office.camera_motion: must be one of xyz, static, rpy, halfsphere (got 'spin')");

@@ -126,6 +126,52 @@ TEST(WorldTest, OpenPathPingPongs) {
   EXPECT_NEAR(back.linear().col(0).x(), -1.0, 1e-6);
 }
 
+// A car at 6 m/s, braking at 2 m/s^2: 3 s and 9 m from cruising to standing.
+TEST(WorldTest, HaltBrakesStandsAndPullsAwayWithKnownTimes) {
+  const double v = 6.0, a = 2.0, start = 10.0;
+  const std::vector<Halt> halts = {{40.0, 5.0}};
+  auto at = [&](double t) { return DistanceWithHalts(start, v, halts, a, t); };
+  // Cruising until braking starts at 31 m (t = 21 / 6 = 3.5 s).
+  EXPECT_DOUBLE_EQ(at(0.0), start);
+  EXPECT_NEAR(at(3.5), 31.0, 1e-12);
+  // Half-way through braking: 31 + 6 * 1.5 - 0.5 * 2 * 1.5^2 = 37.75 m.
+  EXPECT_NEAR(at(5.0), 37.75, 1e-12);
+  // Standing from 6.5 s to 11.5 s.
+  EXPECT_NEAR(at(6.5), 40.0, 1e-12);
+  EXPECT_DOUBLE_EQ(at(9.0), 40.0);
+  EXPECT_NEAR(at(11.5), 40.0, 1e-12);
+  // Pulling away: 1 s after the green, 0.5 * 2 * 1 = 1 m; back at speed 9 m on.
+  EXPECT_NEAR(at(12.5), 41.0, 1e-12);
+  EXPECT_NEAR(at(14.5), 49.0, 1e-12);
+  // Then 5 s of standing plus 3 s (= v / a) behind the schedule without the halt.
+  EXPECT_NEAR(at(20.0), start + v * (20.0 - 8.0), 1e-12);
+  // Never backwards, no jumps.
+  for (double t = 0; t < 25.0; t += 0.01) {
+    EXPECT_GE(at(t + 0.01), at(t) - 1e-12) << t;
+    EXPECT_LE(at(t + 0.01) - at(t), v * 0.01 + 1e-9) << t;
+  }
+  // A halt it is already past at t = 0 does nothing.
+  EXPECT_DOUBLE_EQ(DistanceWithHalts(50.0, v, halts, a, 2.0), 62.0);
+  // Two halts add their delays.
+  const std::vector<Halt> two = {{40.0, 5.0}, {100.0, 2.0}};
+  EXPECT_NEAR(DistanceWithHalts(start, v, two, a, 40.0), start + v * (40.0 - 8.0 - 5.0), 1e-12);
+}
+
+TEST(WorldTest, HaltingCarStandsStillOnItsPath) {
+  Object o;
+  o.parts.resize(1);  // rigid: its part moves with the root
+  o.placement[0].moving = true;
+  o.placement[0].path.waypoints = {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(200, 0, 0)};
+  o.placement[0].path.closed = false;
+  o.placement[0].path.speed_mps = 6.0;
+  o.placement[0].path.halts = {{30.0, 4.0}};
+  // Braking from 21 m at 3.5 s, standing from 6.5 s to 10.5 s.
+  EXPECT_NEAR(ObjectPoseAt(o, Pass::kFirst, 8.0).translation().x(), 30.0, 1e-9);
+  EXPECT_FALSE(ObjectMovesAt(o, Pass::kFirst, 8.0, 1.0));
+  EXPECT_TRUE(ObjectMovesAt(o, Pass::kFirst, 10.5, 0.1));
+  EXPECT_TRUE(ObjectMovesAt(o, Pass::kFirst, 1.0, 0.1));
+}
+
 TEST(WorldTest, CameraPoseInterpolatesAndClamps) {
   World w;
   w.camera.fps = 10;
