@@ -1131,14 +1131,30 @@ class CityBuilder {
           const Crosswalk& c = crosswalks[(k * crosswalks.size() / crossers + a / 4) % crosswalks.size()];
           const double side = Chance(rng, 0.5) ? 1.0 : -1.0;  // starts right (+1) or left
           const double w = road_ / 2 + walk_ * Uniform(rng, 0.45, 0.6);
-          const Vec2 from = c.centre + Right(c.along) * side * w, to = c.centre - Right(c.along) * side * w;
-          const double before = Chance(rng, 0.5) ? 1.0 : -1.0, after = Chance(rng, 0.5) ? 1.0 : -1.0;
+          // A crowd at a red light spreads over the crosswalk's width (the far part: the
+          // near edge is 2.5 m from the camera) to pass each other, and keeps to the
+          // sidewalks of the camera's street before and after, off the way the camera
+          // takes when the light turns green.
+          const Vec2 line = c.centre + c.along * (c.light ? Uniform(rng, -0.5, 1.3) : 0.0);
+          const Vec2 from = line + Right(c.along) * side * w, to = line - Right(c.along) * side * w;
+          double before = -1.0, after = -1.0;
+          if (!c.light) {
+            before = Chance(rng, 0.5) ? 1.0 : -1.0;
+            after = Chance(rng, 0.5) ? 1.0 : -1.0;
+          }
           const double leg = 60.0;
           PathMotion p = WalkPath({from + c.along * before * leg, from, to, to + c.along * after * leg});
           p.speed_mps = speed;
-          // In the middle of the street when the camera is 16-32 m before the crosswalk.
-          const double t_mid = c.light ? Uniform(rng, c.light->stand_from_s + 1.0, c.light->stand_until_s - 1.0)
-                                       : CameraTimeAt(std::max(0.0, c.s - Uniform(rng, 16.0, 32.0)));
+          // In the middle of the street when the camera is 16-32 m before the crosswalk; at
+          // a red light, while the camera stands, and off the street before it turns green.
+          double t_mid;
+          if (c.light) {
+            const double earliest = c.light->stand_from_s + 1.0;
+            const double latest = c.light->stand_until_s - 1.0 - w / speed;
+            t_mid = Uniform(rng, earliest, std::max(earliest, latest));
+          } else {
+            t_mid = CameraTimeAt(std::max(0.0, c.s - Uniform(rng, 16.0, 32.0)));
+          }
           p.start_offset_m = leg + w - speed * t_mid;
           return p;
         };

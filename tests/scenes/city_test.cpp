@@ -167,7 +167,7 @@ TEST(CityTest, NothingMovesInTheStaticCity) {
 }
 
 TEST(CityTest, CameraIsNeverInsideAGeom) {
-  for (const std::string file : {"test/city_small.yaml", "city_two_pass.yaml"}) {
+  for (const std::string file : {"test/city_small.yaml", "city_two_pass.yaml", "city_rush_hour.yaml"}) {
     const World w = BuildWorld(LoadScenario(ScenarioPath(file)));
     for (Pass pass : kBothPasses) {
       for (int f = 0; f < w.frames_per_pass[PassIndex(pass)]; f += 3) {
@@ -180,9 +180,6 @@ TEST(CityTest, CameraIsNeverInsideAGeom) {
   }
 }
 
-// Moving actors are scripted against the camera route: cars ahead, oncoming and crossing,
-// pedestrians on the route's sidewalks and crosswalks. Checked geometrically (object roots
-// in the horizontal field of view, within 40 m in front), and for clearance at frame rate.
 // Frames [first, last] over which the camera stands still, in order.
 std::vector<std::pair<int, int>> StandingStretches(const World& w, Pass pass) {
   std::vector<std::pair<int, int>> stretches;
@@ -251,39 +248,44 @@ TEST(CityTest, CameraWaitsAtRedLightsWhileTrafficAndPeopleCrossInFront) {
   }
 }
 
+// Moving actors are scripted against the camera route: cars ahead, oncoming and crossing,
+// pedestrians on the route's sidewalks and crosswalks. Checked geometrically (object roots
+// in the horizontal field of view, within 40 m in front), and for clearance at frame rate.
 TEST(CityTest, MovingActorsAreSeenAlongTheRouteAndKeepClear) {
-  const World w = BuildWorld(LoadScenario(ScenarioPath("city_two_pass.yaml")));
-  const double tan_half_h = std::tan(0.5 * w.camera.fovy_deg * M_PI / 180.0) * w.camera.width / w.camera.height;
-  for (Pass pass : kBothPasses) {
-    int car_frames = 0, person_frames = 0;
-    double min_car = 1e9, min_person = 1e9;
-    const int frames = w.frames_per_pass[PassIndex(pass)];
-    for (int f = 0; f < frames; ++f) {
-      const double t = FrameStamp(w, f);
-      const Eigen::Isometry3d T_wc = CameraPoseAt(w, pass, t);
-      bool car_seen = false, person_seen = false;
-      for (const Object& o : w.objects) {
-        const Placement& p = o.placement[PassIndex(pass)];
-        if (!p.present || !p.moving) continue;
-        const bool person = o.articulation == Articulation::kWalker;
-        const Eigen::Vector3d root = ObjectPoseAt(o, pass, t).translation();
-        const double d = (root - T_wc.translation()).head<2>().norm();
-        (person ? min_person : min_car) = std::min(person ? min_person : min_car, d);
-        const Eigen::Vector3d c = T_wc.inverse() * Eigen::Vector3d(root.x(), root.y(), T_wc.translation().z());
-        if (c.z() > 0.5 && c.z() <= 40.0 && std::abs(c.x()) <= tan_half_h * c.z()) (person ? person_seen : car_seen) = true;
+  for (const std::string file : {"city_two_pass.yaml", "city_rush_hour.yaml"}) {
+    const World w = BuildWorld(LoadScenario(ScenarioPath(file)));
+    const double tan_half_h = std::tan(0.5 * w.camera.fovy_deg * M_PI / 180.0) * w.camera.width / w.camera.height;
+    for (Pass pass : kBothPasses) {
+      int car_frames = 0, person_frames = 0;
+      double min_car = 1e9, min_person = 1e9;
+      const int frames = w.frames_per_pass[PassIndex(pass)];
+      for (int f = 0; f < frames; ++f) {
+        const double t = FrameStamp(w, f);
+        const Eigen::Isometry3d T_wc = CameraPoseAt(w, pass, t);
+        bool car_seen = false, person_seen = false;
+        for (const Object& o : w.objects) {
+          const Placement& p = o.placement[PassIndex(pass)];
+          if (!p.present || !p.moving) continue;
+          const bool person = o.articulation == Articulation::kWalker;
+          const Eigen::Vector3d root = ObjectPoseAt(o, pass, t).translation();
+          const double d = (root - T_wc.translation()).head<2>().norm();
+          (person ? min_person : min_car) = std::min(person ? min_person : min_car, d);
+          const Eigen::Vector3d c = T_wc.inverse() * Eigen::Vector3d(root.x(), root.y(), T_wc.translation().z());
+          if (c.z() > 0.5 && c.z() <= 40.0 && std::abs(c.x()) <= tan_half_h * c.z()) (person ? person_seen : car_seen) = true;
+        }
+        car_frames += car_seen;
+        person_frames += person_seen;
       }
-      car_frames += car_seen;
-      person_frames += person_seen;
+      const double car_share = static_cast<double>(car_frames) / frames;
+      const double person_share = static_cast<double>(person_frames) / frames;
+      std::printf("%s %s: moving car in view within 40 m in %.1f%% of frames, pedestrian in %.1f%%; "
+                  "closest car %.2f m, closest pedestrian %.2f m\n",
+                  file.c_str(), PassName(pass), 100 * car_share, 100 * person_share, min_car, min_person);
+      EXPECT_GE(car_share, 0.5) << file << " " << PassName(pass);
+      EXPECT_GE(person_share, 0.2) << file << " " << PassName(pass);
+      EXPECT_GE(min_car, 3.0) << file << " " << PassName(pass);
+      EXPECT_GE(min_person, 3.0) << file << " " << PassName(pass);
     }
-    const double car_share = static_cast<double>(car_frames) / frames;
-    const double person_share = static_cast<double>(person_frames) / frames;
-    std::printf("%s: moving car in view within 40 m in %.1f%% of frames, pedestrian in %.1f%%; "
-                "closest car %.2f m, closest pedestrian %.2f m\n",
-                PassName(pass), 100 * car_share, 100 * person_share, min_car, min_person);
-    EXPECT_GE(car_share, 0.5) << PassName(pass);
-    EXPECT_GE(person_share, 0.2) << PassName(pass);
-    EXPECT_GE(min_car, 3.0) << PassName(pass);
-    EXPECT_GE(min_person, 3.0) << PassName(pass);
   }
 }
 
