@@ -22,7 +22,7 @@ constexpr double kGroundFloorM = 4.2;  // shop floor height
 constexpr double kFloorM = 3.2;        // upper floor height
 constexpr double kBayM = 3.3;          // window bay width
 constexpr int kFacadeFloors = 3, kFacadeBays = 4;
-constexpr double kStopLineM = 4.0;          // stop line, from the far edge of the crossing road
+constexpr double kStopLineM = 4.0;          // stop line, before the edge of the crossing road
 constexpr double kCameraToBumperM = 2.0;    // camera car: from the camera to its front bumper
 constexpr double kQueueGapM = 2.0;          // bumper to bumper, standing in a queue
 constexpr double kCarAccelMps2 = 2.0;       // braking and pulling away at a red light
@@ -1114,11 +1114,13 @@ class CityBuilder {
     const Vec2 dirs[4] = {Vec2(1, 0), Vec2(0, 1), Vec2(-1, 0), Vec2(0, -1)};
     auto crosswalk_before = [&](std::size_t k) -> Vec2 { return NodePos(nodes_[k]) - dirs[dirs_[k]] * (road_ / 2 + 2.0); };
     for (const RedLight& r : red_lights_) crosswalks.push_back({crosswalk_before(r.node), r.arrive, 0.0, &r});
-    for (std::size_t k = 0; k < nodes_.size() && red_lights_.empty(); ++k) {
-      const Vec2 a = dirs[dirs_[k]];
-      const Vec2 centre = crosswalk_before(k);
-      const double s = forward.Closest(centre + Right(a) * lane_) - f0;
-      if (s > 24.0 && s < lane_s_.back() + 30.0) crosswalks.push_back({centre, a, s, nullptr});
+    if (red_lights_.empty()) {
+      for (std::size_t k = 0; k < nodes_.size(); ++k) {
+        const Vec2 a = dirs[dirs_[k]];
+        const Vec2 centre = crosswalk_before(k);
+        const double s = forward.Closest(centre + Right(a) * lane_) - f0;
+        if (s > 24.0 && s < lane_s_.back() + 30.0) crosswalks.push_back({centre, a, s, nullptr});
+      }
     }
     const int crossers = crosswalks.empty() ? 0 : static_cast<int>(std::lround(spec_.crossing_share * n));
     for (int k = 0; k < n; ++k) {
