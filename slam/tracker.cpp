@@ -1069,8 +1069,10 @@ std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& ins
       judgement.moving_share =
           judgement.num_points > 0 ? double(judgement.num_moving_points) / judgement.num_points : 0;
       const bool measured = judgement.num_points >= options_.min_points_to_judge;
-      judgement.moving =
-          measured && judgement.moving_share >= options_.moving_share_threshold && evidence.ConsensusMoves();
+      const bool evidence_enough_to_move =
+          judgement.moveable_class || judgement.num_points >= options_.min_points_to_move_fixed_class;
+      judgement.moving = measured && evidence_enough_to_move &&
+                         judgement.moving_share >= options_.moving_share_threshold && evidence.ConsensusMoves();
       judgement.judged = measured && (judgement.moving || full_baseline);
       if (judgement.moving) {
         const bool in_a_row = s.current.stamp_s - memory.last_moving_stamp_s <= options_.moving_memory_s + 1e-9;

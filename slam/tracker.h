@@ -170,6 +170,13 @@ struct TrackerOptions {
   // a parked car must not make it a moving one (all points of a moving rigid object move).
   int min_points_to_judge = 4;
   double moving_share_threshold = 0.5;
+  // An instance of a class that does not move (not on the moveable shortlist: a traffic
+  // light, a bench, a hydrant) is judged moving only on at least this many measured
+  // points. Its few matches are often wrong in a consistent way (a traffic light's three
+  // lamps match each other), which would keep it "moving" for as long as the camera
+  // looks at it, e.g. while standing at the light; a large object the segmenter
+  // mislabels still shows enough points when it really moves.
+  int min_points_to_move_fixed_class = 20;
   // An instance measured moving on moving_streak_frames frames in a row (none more than
   // moving_memory_s apart) stays moving, until it is seen again with at least
   // min_points_to_clear_moving measured features (or an eighth of its features, when that

@@ -57,6 +57,7 @@ const std::map<std::string, Setter>& Setters() {
       SEGSLAM_REAL(motion_baseline_s),
       SEGSLAM_INT(min_points_to_judge),
       SEGSLAM_REAL(moving_share_threshold),
+      SEGSLAM_INT(min_points_to_move_fixed_class),
       SEGSLAM_INT(moving_streak_frames),
       SEGSLAM_REAL(moving_memory_s),
       SEGSLAM_INT(min_points_to_clear_moving),

@@ -222,5 +222,51 @@ TEST(TrackerTest, MutualJudgesAMovingBoxMovingAndAStillBoxStatic) {
   }
 }
 
+// The sliding box again, now of a class that does not move (not in moveable_ids): it is
+// judged moving only on min_points_to_move_fixed_class measured points, which the box
+// shows (it fills much of the view) but a small fixed object, like a traffic light
+// whose lamps match each other, does not.
+TEST(TrackerTest, FixedClassInstanceNeedsMorePointsToBeJudgedMoving) {
+  const PinholeCamera camera = TestCamera();
+  const auto room = RoomQuads(5);
+  // Per frame of the box: (judged moving, measured points).
+  auto judge_box = [&](int min_points_to_move_fixed_class) {
+    FrameInstances instances;  // no moveable ids: every instance is of a fixed class
+    TrackerOptions options = StartingAt(PathPose(0));
+    options.min_points_to_move_fixed_class = min_points_to_move_fixed_class;
+    Tracker tracker(camera, options);
+    std::vector<std::pair<bool, int>> judgements;
+    for (int i = 0; i < 30; ++i) {
+      const double y = -0.2 + 1.5 * i / 30.0 - 0.6;
+      auto quads = room;
+      const auto moving_box = BoxQuads({1.2, y, 0.0}, {1.8, y + 0.6, 1.6}, 99, 1);
+      quads.insert(quads.end(), moving_box.begin(), moving_box.end());
+      const auto rendered = RenderQuads(quads, camera, PathPose(i), i, i / 30.0);
+      instances.ids = rendered.instance_ids;
+      const FrameResult result = tracker.Track(rendered.frame, &instances, SlamMode::kMutual);
+      for (const InstanceJudgement& judgement : result.instances) {
+        if (judgement.id == 1) judgements.push_back({judgement.moving, judgement.num_points});
+      }
+    }
+    return judgements;
+  };
+  auto count_moving = [](const std::vector<std::pair<bool, int>>& judgements) {
+    return std::count_if(judgements.begin(), judgements.end(), [](const auto& j) { return j.first; });
+  };
+  const auto by_default = judge_box(TrackerOptions{}.min_points_to_move_fixed_class);
+  int most_points = 0;
+  for (const auto& [moving, points] : by_default) most_points = std::max(most_points, points);
+  EXPECT_GE(most_points, TrackerOptions{}.min_points_to_move_fixed_class) << "the box shows the evidence";
+  EXPECT_GE(count_moving(by_default), 10) << "a large fixed-class object that moves is still judged moving";
+  const int strict = most_points + 1;
+  const auto by_strict = judge_box(strict);
+  EXPECT_LT(count_moving(by_strict), count_moving(by_default));
+  for (const auto& [moving, points] : by_strict) {
+    if (moving) {
+      EXPECT_GE(points, strict) << "judged moving on fewer points than asked";
+    }
+  }
+}
+
 }  // namespace
 }  // namespace segslam::slam
