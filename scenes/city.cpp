@@ -250,7 +250,6 @@ class CityBuilder {
     double camera_stop_s = 0;      // camera arc length where it stands
     double stand_from_s = 0, stand_until_s = 0;  // on the pass clock
     std::string lead_kind;         // vehicle it waits behind; empty: first in line
-    double lead_half_length = 0;
   };
 
   // Stop line on the camera's lane before node k, arriving in direction a.
@@ -280,9 +279,9 @@ class CityBuilder {
       RedLight r = candidates[(2 * i + 1) * candidates.size() / (2 * n)];  // spread over the route
       if (i % 2 == 0) {
         r.lead_kind = VehicleKind(rng, /*allow_bus=*/true);
-        double half_width;
-        VehicleSize(r.lead_kind, &r.lead_half_length, &half_width);
-        r.camera_stop_s -= 2 * r.lead_half_length + kQueueGapM;
+        double half_length, half_width;
+        VehicleSize(r.lead_kind, &half_length, &half_width);
+        r.camera_stop_s -= 2 * half_length + kQueueGapM;
       }
       camera_halts_.push_back({r.camera_stop_s, spec_.red_light_s});
       red_lights_.push_back(r);
@@ -909,9 +908,9 @@ class CityBuilder {
         pts.push_back(corner);
         pts.push_back(corner + exit * 300.0);
       }
-      const double stand_at = stop_arc - r.lead_half_length;  // its front at the stop line
       double half_length, half_width;
       VehicleSize(r.lead_kind, &half_length, &half_width);
+      const double stand_at = stop_arc - half_length;  // its front at the stop line
       PlaceMover(index, half_length, half_width, /*car=*/true, /*min_camera_m=*/3.15, 40, [&](int) {
         PathMotion p = DrivePath(pts);
         p.speed_mps = v;

@@ -76,9 +76,10 @@ struct Halt {
 };
 
 // Distance travelled at time t by a mover that starts at `start_m`, cruises at speed_mps
-// and makes `halts` (sorted by at_m; those behind start_m are ignored) braking and
-// accelerating at accel_mps2. Each halt delays the rest of the trip by wait_s +
-// speed / accel against cruising straight through. Continuous and non-decreasing in t.
+// and makes `halts` (sorted by at_m; one it would have had to start braking for before
+// start_m is ignored), braking and accelerating at accel_mps2. Each halt delays the rest
+// of the trip by wait_s + speed / accel against cruising straight through. Continuous
+// and non-decreasing in t.
 double DistanceWithHalts(double start_m, double speed_mps, const std::vector<Halt>& halts, double accel_mps2,
                          double t);
 
