@@ -32,6 +32,9 @@ using Vec2 = Eigen::Vector2d;
 using Vec3 = Eigen::Vector3d;
 using Node = std::pair<int, int>;
 
+// Street directions by index (+x, +y, -x, -y); dirs_[k] indexes this.
+const Vec2 kStreetDirs[4] = {Vec2(1, 0), Vec2(0, 1), Vec2(-1, 0), Vec2(0, -1)};
+
 Vec2 Right(const Vec2& d) { return Vec2(d.y(), -d.x()); }
 Vec3 At(const Vec2& p, double z) { return Vec3(p.x(), p.y(), z); }
 double YawOf(const Vec2& d) { return std::atan2(d.y(), d.x()); }
@@ -148,7 +151,6 @@ class CityBuilder {
   // street if it can avoid it), then the right-hand lane through it with rounded turns.
   void PlanRoute() {
     std::mt19937_64 rng = Rng("route");
-    const Vec2 dirs[4] = {Vec2(1, 0), Vec2(0, 1), Vec2(-1, 0), Vec2(0, -1)};
     int dir = UniformInt(rng, 0, 3);
     Node node{0, 0};
     nodes_ = {node};
@@ -163,13 +165,15 @@ class CityBuilder {
       if (r > 0.55) std::swap(options[0], options[r > 0.775 ? 1 : 2]);
       int chosen = options[0];
       for (int o : options) {
-        const Node next{node.first + static_cast<int>(dirs[o].x()), node.second + static_cast<int>(dirs[o].y())};
+        const Node next{node.first + static_cast<int>(kStreetDirs[o].x()),
+                        node.second + static_cast<int>(kStreetDirs[o].y())};
         if (!used.count({std::min(node, next), std::max(node, next)})) {
           chosen = o;
           break;
         }
       }
-      const Node next{node.first + static_cast<int>(dirs[chosen].x()), node.second + static_cast<int>(dirs[chosen].y())};
+      const Node next{node.first + static_cast<int>(kStreetDirs[chosen].x()),
+                      node.second + static_cast<int>(kStreetDirs[chosen].y())};
       used.insert({std::min(node, next), std::max(node, next)});
       node = next;
       dir = chosen;
@@ -191,19 +195,18 @@ class CityBuilder {
     imin_ -= 1, jmin_ -= 1, imax_ += 1, jmax_ += 1;
 
     // Directed route edges (the one leading into node 0 included).
-    const Node before{nodes_[0].first - static_cast<int>(dirs[dirs_[0]].x()),
-                      nodes_[0].second - static_cast<int>(dirs[dirs_[0]].y())};
+    const Node before{nodes_[0].first - static_cast<int>(kStreetDirs[dirs_[0]].x()),
+                      nodes_[0].second - static_cast<int>(kStreetDirs[dirs_[0]].y())};
     route_edges_.insert({before, nodes_[0]});
     for (std::size_t k = 1; k < nodes_.size(); ++k) route_edges_.insert({nodes_[k - 1], nodes_[k]});
 
     // Lane polyline: from mid-block before node 0, through rounded corners.
     const double radius = std::min(6.0, block_ / 5);
-    auto dvec = [&](int d) { return dirs[d]; };
     std::vector<Vec2> pts;
-    const Vec2 d0 = dvec(dirs_[0]);
+    const Vec2 d0 = kStreetDirs[dirs_[0]];
     pts.push_back(NodePos(nodes_[0]) - d0 * (block_ / 2) + Right(d0) * lane_);
     for (std::size_t k = 1; k + 1 < nodes_.size(); ++k) {
-      const Vec2 a = dvec(dirs_[k]), b = dvec(dirs_[k + 1]);
+      const Vec2 a = kStreetDirs[dirs_[k]], b = kStreetDirs[dirs_[k + 1]];
       if (dirs_[k] == dirs_[k + 1]) continue;
       const Vec2 corner = NodePos(nodes_[k]) + Right(a) * lane_ + Right(b) * lane_;
       const Vec2 centre = corner - a * radius + b * radius;
@@ -212,7 +215,7 @@ class CityBuilder {
         pts.push_back(centre + radius * (-b * std::cos(th) + a * std::sin(th)));
       }
     }
-    const Vec2 dl = dvec(dirs_.back());
+    const Vec2 dl = kStreetDirs[dirs_.back()];
     pts.push_back(NodePos(nodes_.back()) + Right(dl) * lane_);
 
     // Densify and cut at the route length.
@@ -262,7 +265,6 @@ class CityBuilder {
     camera_halts_.clear();
     if (spec_.red_lights <= 0) return;
     std::mt19937_64 rng = Rng("red_lights");
-    const Vec2 dirs[4] = {Vec2(1, 0), Vec2(0, 1), Vec2(-1, 0), Vec2(0, -1)};
     const Poly2 lane(lane_pts_);
     // Candidates: every intersection the camera reaches with room to brake before it and
     // to see the scene after it.
@@ -270,7 +272,7 @@ class CityBuilder {
     for (std::size_t k = 1; k < nodes_.size(); ++k) {
       RedLight r;
       r.node = k;
-      r.arrive = dirs[dirs_[k]];
+      r.arrive = kStreetDirs[dirs_[k]];
       r.camera_stop_s = lane.Closest(StopLinePoint(k, r.arrive) - r.arrive * kCameraToBumperM);
       if (r.camera_stop_s >= 40.0 && r.camera_stop_s <= lane_s_.back() - 15.0) candidates.push_back(r);
     }
@@ -450,9 +452,8 @@ class CityBuilder {
 
   void MakeIntersection(std::mt19937_64& rng, const Node& n) {
     const Vec2 c = NodePos(n);
-    const Vec2 dirs[4] = {Vec2(1, 0), Vec2(0, 1), Vec2(-1, 0), Vec2(0, -1)};
     // Crosswalks on all four arms, stripes along the street (texture u across it).
-    for (const Vec2& d : dirs) {
+    for (const Vec2& d : kStreetDirs) {
       const Vec2 p = c + d * (road_ / 2 + 2.0);
       world_.static_geoms.push_back(MakeBox(At(p, 0.007), Vec3(road_ / 2 - 0.6, 1.5, 0.007), look_.crosswalk, YawOf(Right(d))));
       // Stop line before the crosswalk on the incoming lane.
@@ -954,8 +955,7 @@ class CityBuilder {
     std::vector<Crossing> crossings;
     for (std::size_t k = 0; k < nodes_.size(); ++k) {
       const double s = forward.Closest(NodePos(nodes_[k])) - f0;
-      const Vec2 dirs[4] = {Vec2(1, 0), Vec2(0, 1), Vec2(-1, 0), Vec2(0, -1)};
-      if (s > 16.0 && s < route_len + 20.0) crossings.push_back({nodes_[k], dirs[dirs_[k]], s});
+      if (s > 16.0 && s < route_len + 20.0) crossings.push_back({nodes_[k], kStreetDirs[dirs_[k]], s});
     }
 
     std::vector<double> turns;  // route arc length of the turns
@@ -1110,12 +1110,11 @@ class CityBuilder {
       const RedLight* light;  // where the camera stands before it, or null
     };
     std::vector<Crosswalk> crosswalks;
-    const Vec2 dirs[4] = {Vec2(1, 0), Vec2(0, 1), Vec2(-1, 0), Vec2(0, -1)};
-    auto crosswalk_before = [&](std::size_t k) -> Vec2 { return NodePos(nodes_[k]) - dirs[dirs_[k]] * (road_ / 2 + 2.0); };
+    auto crosswalk_before = [&](std::size_t k) -> Vec2 { return NodePos(nodes_[k]) - kStreetDirs[dirs_[k]] * (road_ / 2 + 2.0); };
     for (const RedLight& r : red_lights_) crosswalks.push_back({crosswalk_before(r.node), r.arrive, 0.0, &r});
     if (red_lights_.empty()) {
       for (std::size_t k = 0; k < nodes_.size(); ++k) {
-        const Vec2 a = dirs[dirs_[k]];
+        const Vec2 a = kStreetDirs[dirs_[k]];
         const Vec2 centre = crosswalk_before(k);
         const double s = forward.Closest(centre + Right(a) * lane_) - f0;
         if (s > 24.0 && s < lane_s_.back() + 30.0) crosswalks.push_back({centre, a, s, nullptr});
