@@ -164,9 +164,7 @@ void ScoreMovingDetection(const std::vector<LoggedFrame>& frames, const fs::path
   }
   MovingDetectionScores scores;
   for (const LoggedFrame& frame : frames) {
-    const bool any_judged = std::any_of(frame.instances.begin(), frame.instances.end(),
-                                        [](const LoggedInstance& instance) { return instance.judged; });
-    if (!any_judged) continue;
+    if (frame.instances.empty()) continue;
     std::map<int, int> gt_id_of;
     if (by_overlap) {
       const std::string stem = fs::path(frame.rgb_file).stem().string();
@@ -177,8 +175,8 @@ void ScoreMovingDetection(const std::vector<LoggedFrame>& frames, const fs::path
       if (run_ids.size() != gt_ids.size()) throw FileError(run_mask, "eval: size differs from " + gt_mask.string());
       gt_id_of = DominantGroundTruthIds(run_ids, gt_ids);
     }
+    std::map<int, bool> seen_moving;  // truly moving ground-truth id -> judged moving here
     for (const LoggedInstance& instance : frame.instances) {
-      if (!instance.judged) continue;
       int gt_id = instance.id;
       if (by_overlap) {
         const auto found = gt_id_of.find(instance.id);
@@ -186,12 +184,17 @@ void ScoreMovingDetection(const std::vector<LoggedFrame>& frames, const fs::path
       }
       const auto found = truly_moving.find({gt_id, frame.index});
       const bool moving = found != truly_moving.end() && found->second;
+      if (moving) seen_moving[gt_id] = seen_moving[gt_id] || (instance.judged && instance.moving);
+      if (!instance.judged) continue;
       if (instance.moving) {
         ++(moving ? scores.true_positives : scores.false_positives);
       } else {
         ++(moving ? scores.false_negatives : scores.true_negatives);
       }
     }
+    scores.moving_seen += static_cast<int>(seen_moving.size());
+    scores.moving_seen_detected +=
+        static_cast<int>(std::count_if(seen_moving.begin(), seen_moving.end(), [](const auto& e) { return e.second; }));
   }
   pass->moving = scores;
 }
@@ -298,6 +301,10 @@ double MovingDetectionScores::Recall() const {
   return actual > 0 ? double(true_positives) / actual : kNaN;
 }
 
+double MovingDetectionScores::Coverage() const {
+  return moving_seen > 0 ? double(moving_seen_detected) / moving_seen : kNaN;
+}
+
 nlohmann::json PassEvaluation::ToJson() const {
   nlohmann::json T_gt_est_json = nlohmann::json::array();
   for (int row = 0; row < 4; ++row) {
@@ -339,7 +346,10 @@ nlohmann::json PassEvaluation::ToJson() const {
                                 {"false_negatives", moving->false_negatives},
                                 {"true_negatives", moving->true_negatives},
                                 {"precision", NumberJson(moving->Precision())},
-                                {"recall", NumberJson(moving->Recall())}};
+                                {"recall", NumberJson(moving->Recall())},
+                                {"moving_seen", moving->moving_seen},
+                                {"moving_seen_detected", moving->moving_seen_detected},
+                                {"coverage", NumberJson(moving->Coverage())}};
   }
   for (const auto& [metric, value] : PassMetrics(*this)) json["metrics"][metric] = NumberJson(value);
   return json;
@@ -388,15 +398,16 @@ std::string RunEvaluation::Table() const {
   }
   const bool any_moving = std::any_of(passes.begin(), passes.end(), [](const auto& p) { return p.moving.has_value(); });
   if (any_moving) {
-    text += fmt::format("\nMoving-object detection over judged instances vs tracks.json\n{:<8} {:>7} {:>9} {:>7} "
-                        "{:>5} {:>5} {:>5} {:>5}\n",
-                        "sequence", "judged", "precision", "recall", "tp", "fp", "fn", "tn");
+    text += fmt::format("\nMoving-object detection over judged instances vs tracks.json; coverage: the share of moving "
+                        "instances seen (a feature on them, judged or not) that were judged moving\n{:<8} {:>7} {:>9} "
+                        "{:>7} {:>5} {:>5} {:>5} {:>5} {:>8}\n",
+                        "sequence", "judged", "precision", "recall", "tp", "fp", "fn", "tn", "coverage");
     for (const PassEvaluation& p : passes) {
       if (!p.moving.has_value()) continue;
       const MovingDetectionScores& m = *p.moving;
-      text += fmt::format("{:<8} {:>7} {:>9} {:>7} {:>5} {:>5} {:>5} {:>5}\n", p.name, m.Judged(),
+      text += fmt::format("{:<8} {:>7} {:>9} {:>7} {:>5} {:>5} {:>5} {:>5} {:>8}\n", p.name, m.Judged(),
                           Percent(m.Precision()), Percent(m.Recall()), m.true_positives, m.false_positives,
-                          m.false_negatives, m.true_negatives);
+                          m.false_negatives, m.true_negatives, Percent(m.Coverage()));
     }
   }
   return text;
@@ -431,7 +442,7 @@ const std::vector<std::string>& PassMetricNames() {
       "ate_rmse_m",       "ate_mean_m",      "ate_median_m",     "ate_std_m",        "ate_min_m",
       "ate_max_m",        "rpe_trans_rmse_m", "rpe_rot_rmse_deg", "localized_share",  "seg_raw_map",
       "seg_raw_ap50",     "seg_raw_miou",    "seg_refined_map",  "seg_refined_ap50", "seg_refined_miou",
-      "moving_precision", "moving_recall"};
+      "moving_precision", "moving_recall",   "moving_coverage"};
   return names;
 }
 
@@ -462,6 +473,7 @@ std::map<std::string, double> PassMetrics(const PassEvaluation& pass) {
   if (pass.moving.has_value()) {
     metrics["moving_precision"] = pass.moving->Precision();
     metrics["moving_recall"] = pass.moving->Recall();
+    metrics["moving_coverage"] = pass.moving->Coverage();
   }
   return metrics;
 }

@@ -42,8 +42,10 @@ namespace segslam::harness {
 //   segmenter's ids carry no ground-truth identity;
 // - a segmenter's masks that were not saved: not scored (absent, with the reason).
 // A ground-truth instance without a tracks.json sample at that frame, and background,
-// count as not moving. Instances SLAM did not judge are not counted: they are neither
-// detections nor misses.
+// count as not moving. Instances SLAM did not judge are not counted in precision and
+// recall: they are neither detections nor misses there. Coverage counts them: of the
+// (frame, truly moving ground-truth instance) pairs SLAM saw (at least one feature on
+// the instance, judged or not), the share where it judged the instance moving.
 struct MovingDetectionScores {
   int true_positives = 0;   // judged moving, truly moving
   int false_positives = 0;  // judged moving, truly static
@@ -52,6 +54,9 @@ struct MovingDetectionScores {
   int Judged() const { return true_positives + false_positives + false_negatives + true_negatives; }
   double Precision() const;  // tp / (tp + fp); NaN when nothing was judged moving
   double Recall() const;     // tp / (tp + fn); NaN when nothing judged was truly moving
+  int moving_seen = 0;           // (frame, truly moving instance) pairs with a feature on it
+  int moving_seen_detected = 0;  // of those, judged moving
+  double Coverage() const;       // moving_seen_detected / moving_seen; NaN when none was seen
 };
 
 // mAP, AP50 and mIoU of a set of masks (NaN where seg.json holds null).
@@ -114,7 +119,7 @@ RunEvaluation EvaluateRun(const std::filesystem::path& run_dir, const std::files
 //   rpe_trans_rmse_m rpe_rot_rmse_deg          (per second)
 //   localized_share
 //   seg_raw_map seg_raw_ap50 seg_raw_miou seg_refined_map seg_refined_ap50 seg_refined_miou
-//   moving_precision moving_recall
+//   moving_precision moving_recall moving_coverage
 // A metric the pass lacks (no ATE, no seg.json ...) is NaN.
 std::map<std::string, double> PassMetrics(const PassEvaluation& pass);
 // The names PassMetrics returns, in the order above.

@@ -627,20 +627,30 @@ struct Tracker::Impl {
     return snapshot;
   }
 
-  // Frame-to-frame evidence for features of `id` that have no map point: match them to
-  // the same instance's features in the oldest remembered frame (a longer baseline
-  // makes slow walkers measurable) and compare their world positions.
-  // A "static" verdict needs the full baseline: over one frame a walker moves less than
-  // the depth noise. Returns false when only a shorter baseline was available.
-  bool MotionAgainstHistory(std::uint16_t id, const std::vector<int>& features, const Eigen::Isometry3d& T_wc,
-                            InstanceJudgement* judgement, MotionEvidence* evidence) const {
+  struct HistoryMeasurement {
+    // A remembered frame held at least min_points_to_judge of the instance's features
+    // with depth: the instance was there to be followed.
+    bool found_instance = false;
+    // That frame was a full baseline back. A "static" verdict needs it: over one frame a
+    // walker moves less than the depth noise.
+    bool full_baseline = false;
+  };
+
+  // Frame-to-frame evidence for features of `id` that have no map point of their own:
+  // match them to the same instance's features in the oldest remembered frame (a longer
+  // baseline makes slow walkers measurable) and compare their world positions.
+  HistoryMeasurement MotionAgainstHistory(std::uint16_t id, const std::vector<int>& features,
+                                          const Eigen::Isometry3d& T_wc, InstanceJudgement* judgement,
+                                          MotionEvidence* evidence) const {
+    HistoryMeasurement measurement;
     for (const InstanceSnapshot& snapshot : history) {  // oldest first
-      const bool full_baseline = current.stamp_s - snapshot.stamp_s >= options.motion_baseline_s - 1e-6;
+      measurement.full_baseline = current.stamp_s - snapshot.stamp_s >= options.motion_baseline_s - 1e-6;
       std::vector<int> rows;
       for (size_t k = 0; k < snapshot.instance.size(); ++k) {
         if (snapshot.instance[k] == id && std::isfinite(snapshot.point_w[k].x())) rows.push_back(static_cast<int>(k));
       }
       if (static_cast<int>(rows.size()) < options.min_points_to_judge) continue;
+      measurement.found_instance = true;
       cv::Mat past(static_cast<int>(rows.size()), kOrbDescriptorBytes, CV_8U);
       for (size_t k = 0; k < rows.size(); ++k) snapshot.descriptors.row(rows[k]).copyTo(past.row(static_cast<int>(k)));
       std::vector<int> query_features;
@@ -649,7 +659,10 @@ struct Tracker::Impl {
           query_features.push_back(i);
         }
       }
-      if (query_features.empty()) return false;
+      if (query_features.empty()) {
+        measurement.full_baseline = false;
+        return measurement;
+      }
       cv::Mat query(static_cast<int>(query_features.size()), kOrbDescriptorBytes, CV_8U);
       for (size_t k = 0; k < query_features.size(); ++k) {
         current.features.descriptors.row(query_features[k]).copyTo(query.row(static_cast<int>(k)));
@@ -668,9 +681,10 @@ struct Tracker::Impl {
         evidence->Add(x_w - past_w, threshold);
         if ((x_w - past_w).norm() > threshold) ++judgement->num_moving_points;
       }
-      return full_baseline;
+      return measurement;
     }
-    return false;
+    measurement.full_baseline = false;
+    return measurement;
   }
 
   // ---------------------------------------------------------------- mapping
@@ -1039,6 +1053,7 @@ std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& ins
     judgement.moveable_class = instances.moveable_ids.count(id) > 0;
     judgement.num_features = static_cast<int>(features.size());
     std::vector<int> unmatched;
+    std::vector<int> on_other_objects;  // matched to a point of another instance or background
     MotionEvidence evidence;
     InstanceMotionMemory& memory = s.motion_memory[id];
     // Once an instance has been seen still over a full baseline, its young points serve
@@ -1057,6 +1072,15 @@ std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& ins
           unmatched.push_back(f);
           continue;
         }
+        // A match to another object's point is an accidental descriptor match, not a
+        // measurement of this instance: a parked car, added or relocated since the map
+        // was made, matches the façade it now hides, and would be judged moving for as
+        // long as it stays there. Such matches are kept as a last resort (below).
+        if (point->instance_id != id) {
+          unmatched.push_back(f);
+          on_other_objects.push_back(f);
+          continue;
+        }
         const int motion = s.MotionAgainstPoint(i, point, T_wc, &evidence);
         if (motion < 0) continue;
         ++judgement.num_points;
@@ -1064,7 +1088,23 @@ std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& ins
       }
       bool full_baseline = true;
       if (judgement.num_points < options_.min_points_to_judge) {
-        full_baseline = s.MotionAgainstHistory(id, unmatched, T_wc, &judgement, &evidence);
+        const Impl::HistoryMeasurement history = s.MotionAgainstHistory(id, unmatched, T_wc, &judgement, &evidence);
+        full_baseline = history.full_baseline;
+        // The last resort: the instance was there a moment ago with enough features, yet
+        // none of them can be found again, and it has no map points of its own. A walker
+        // does that (limbs and folds change their look within a baseline); a rigid car
+        // seen again is measured above. Then the matches to other objects decide.
+        if (judgement.num_points == 0 && history.found_instance) {
+          for (int f : on_other_objects) {
+            const size_t i = static_cast<size_t>(f);
+            const MapPoint* point = s.current.points[i] != nullptr ? s.current.points[i] : s.current.rejected[i];
+            const int motion = s.MotionAgainstPoint(i, point, T_wc, &evidence);
+            if (motion < 0) continue;
+            ++judgement.num_points;
+            judgement.num_moving_points += motion;
+            full_baseline = true;  // the points are at least a baseline old
+          }
+        }
       }
       judgement.moving_share =
           judgement.num_points > 0 ? double(judgement.num_moving_points) / judgement.num_points : 0;

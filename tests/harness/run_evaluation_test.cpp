@@ -143,6 +143,11 @@ TEST_F(RunEvaluationTest, MovingDetectionCountsJudgedInstancesAgainstTracks) {
   EXPECT_DOUBLE_EQ(scores.Precision(), 0.5);
   EXPECT_DOUBLE_EQ(scores.Recall(), 0.5);
   EXPECT_TRUE(std::isnan(MovingDetectionScores{}.Precision()));
+  // Coverage counts the unjudged mover 6 too: of movers 3, 5 and 6, only 3 was found.
+  EXPECT_EQ(scores.moving_seen, 3);
+  EXPECT_EQ(scores.moving_seen_detected, 1);
+  EXPECT_DOUBLE_EQ(scores.Coverage(), 1.0 / 3.0);
+  EXPECT_TRUE(std::isnan(MovingDetectionScores{}.Coverage()));
 }
 
 // A segmenter's ids carry no ground-truth identity: each judged instance stands for the
@@ -171,10 +176,12 @@ TEST_F(RunEvaluationTest, SegmenterInstancesAreRelatedToGroundTruthByTheirMasks)
   cv::Mat run_ids(20, 40, CV_16U, cv::Scalar(0));
   run_ids(cv::Rect(2, 0, 22, 10)).setTo(1);
   run_ids(cv::Rect(18, 10, 20, 10)).setTo(2);
+  run_ids(cv::Rect(0, 12, 4, 4)).setTo(6);
   const std::string judgements =
       "{\"id\": 1, \"judged\": true, \"moving\": true},"    // over moving 3: true positive
       "{\"id\": 2, \"judged\": true, \"moving\": true},"    // over static 4: false positive
-      "{\"id\": 5, \"judged\": true, \"moving\": false}";   // no pixels: background, true negative
+      "{\"id\": 5, \"judged\": true, \"moving\": false},"   // no pixels: background, true negative
+      "{\"id\": 6, \"judged\": false, \"moving\": false}";  // a second piece over 3, not judged
   WriteRun(dir_ / "run", GroundTruth(0), judgements, "simulated fcis-like seed 1");
   fs::create_directories(dir_ / "run" / "refined_masks");
   WriteInstanceMask(dir_ / "run" / "refined_masks" / "x.png", run_ids);
@@ -186,6 +193,9 @@ TEST_F(RunEvaluationTest, SegmenterInstancesAreRelatedToGroundTruthByTheirMasks)
   EXPECT_EQ(scores.false_positives, 1);
   EXPECT_EQ(scores.false_negatives, 0);
   EXPECT_EQ(scores.true_negatives, 1);
+  // Ground-truth instance 3 is seen through two pieces, and counted once: found.
+  EXPECT_EQ(scores.moving_seen, 1);
+  EXPECT_EQ(scores.moving_seen_detected, 1);
 
   // Without the masks the ids mean nothing: not scored, and the reason says so.
   fs::remove_all(dir_ / "run" / "refined_masks");
