@@ -163,6 +163,8 @@ void RecordSecondPassChanges(World* world, int candidates) {
   for (const Object& o : world->objects) {
     const Placement& p1 = o.placement[0];
     const Placement& p2 = o.placement[1];
+    // Movers are traffic, not changes of what stays put (a city's pass 2 has its own).
+    if (p1.moving || p2.moving) continue;
     if (p1.present && !p2.present) c.removed.push_back(o.instance_id);
     if (!p1.present && p2.present) c.added.push_back(o.instance_id);
     if (p1.present && p2.present && !p1.moving && !p2.moving &&

@@ -79,8 +79,15 @@ class CityBuilder {
     MakeCameraRoutes();
     MakeSamples();
     MakeParkedCars();
-    MakeMovingCars();
-    MakePedestrians();
+    if (spec_.pass2_new_traffic) {
+      for (const Traffic& traffic : {Traffic{{true, false}, ""}, Traffic{{false, true}, "/pass2"}}) {
+        MakeMovingCars(traffic);
+        MakePedestrians(traffic);
+      }
+    } else {
+      MakeMovingCars(Traffic{});
+      MakePedestrians(Traffic{});
+    }
     MakeLights();
     return std::move(world_);
   }
@@ -785,9 +792,17 @@ class CityBuilder {
     double t;
     Vec2 camera;
   };
+  // The movers of one or both passes, and the tag of their random streams (other tags,
+  // other draws: other vehicles and people on other paths at other times).
+  struct Traffic {
+    std::array<bool, 2> present{true, true};  // indexed by PassIndex()
+    std::string tag;
+  };
+
   struct Track {
     std::vector<Vec2> pos;
     std::vector<double> yaw;
+    std::vector<char> present;  // per sample: in the world at that time
     double half_length = 0.3, half_width = 0.3;
     bool car = false;
   };
@@ -811,6 +826,7 @@ class CityBuilder {
       const Eigen::Isometry3d T = ObjectPoseAt(o, s.pass, s.t);
       tr.pos.push_back(T.translation().head<2>());
       tr.yaw.push_back(std::atan2(T.linear()(1, 0), T.linear()(0, 0)));
+      tr.present.push_back(o.placement[PassIndex(s.pass)].present);
     }
     return tr;
   }
@@ -834,8 +850,10 @@ class CityBuilder {
   double Clearance(const Track& tr, double min_camera_m, double floor) const {
     double score = 1e9;
     for (std::size_t i = 0; i < samples_.size(); ++i) {
+      if (!tr.present[i]) continue;
       score = std::min(score, (tr.pos[i] - samples_[i].camera).norm() / min_camera_m);
       for (const Track& other : tracks_) {
+        if (!other.present[i]) continue;
         // Cars keep 0.6 m between bodies, people 0.2 m from anyone.
         const double margin = tr.car && other.car ? 0.3 : 0.1;
         score = std::min(score, SatRatio(tr, other, i, margin));
@@ -845,11 +863,11 @@ class CityBuilder {
     return score;
   }
 
-  // Tries paths from `make(attempt)` on the object (moving, same in both passes) and
-  // keeps the clearest; records its track.
+  // Tries paths from `make(attempt)` on the object (moving, on the same path in each pass
+  // it is `present` in, absent from the other) and keeps the clearest; records its track.
   template <typename MakePath>
-  void PlaceMover(int index, double half_length, double half_width, bool car, double min_camera_m, int attempts,
-                  MakePath make) {
+  void PlaceMover(int index, const std::array<bool, 2>& present, double half_length, double half_width, bool car,
+                  double min_camera_m, int attempts, MakePath make) {
     Object& o = world_.objects[index];
     double best = -1;
     std::array<Placement, 2> best_placement = o.placement;
@@ -859,7 +877,9 @@ class CityBuilder {
       p.present = true;
       p.moving = true;
       p.path = make(a);
-      o.placement = {p, p};
+      Placement absent;
+      absent.present = false;
+      o.placement = {present[0] ? p : absent, present[1] ? p : absent};
       Track tr = TrackOf(o, half_length, half_width, car);
       const double score = Clearance(tr, min_camera_m, best);
       if (score > best) {
@@ -883,8 +903,8 @@ class CityBuilder {
   // before the camera stands behind it, pulls away kReactionS before the camera does,
   // and leaves the route at that intersection (straight on where the camera turns,
   // right where it goes straight), so no two of them meet in the camera's lane.
-  void MakeRedLightLeads(const std::vector<Node>& fnodes) {
-    std::mt19937_64 rng = Rng("red_light_leads");
+  void MakeRedLightLeads(const std::vector<Node>& fnodes, const Traffic& traffic) {
+    std::mt19937_64 rng = Rng("red_light_leads" + traffic.tag);
     const double v = spec_.camera_speed_mps;
     for (const RedLight& r : red_lights_) {
       if (r.lead_kind.empty()) continue;
@@ -912,7 +932,7 @@ class CityBuilder {
       double half_length, half_width;
       VehicleSize(r.lead_kind, &half_length, &half_width);
       const double stand_at = stop_arc - half_length;  // its front at the stop line
-      PlaceMover(index, half_length, half_width, /*car=*/true, /*min_camera_m=*/3.15, 40, [&](int) {
+      PlaceMover(index, traffic.present, half_length, half_width, /*car=*/true, /*min_camera_m=*/3.15, 40, [&](int) {
         PathMotion p = DrivePath(pts);
         p.speed_mps = v;
         p.accel_mps2 = kCarAccelMps2;
@@ -929,8 +949,8 @@ class CityBuilder {
   // Moving cars on the streets of the route: ahead of the camera in its direction of
   // travel (the other lane if there are two, else its own lane, never slower than the
   // camera), oncoming in the opposite lane, and crossing at the route's intersections.
-  void MakeMovingCars() {
-    std::mt19937_64 rng = Rng("moving_cars");
+  void MakeMovingCars(const Traffic& traffic) {
+    std::mt19937_64 rng = Rng("moving_cars" + traffic.tag);
     if (spec_.moving_cars <= 0) return;
     const double ext = 300.0;  // straight extensions, so no path ends while in view
     const double v_cam = spec_.camera_speed_mps;
@@ -976,7 +996,7 @@ class CityBuilder {
       const int role = k < 6 ? pattern[k] : 1 + k % 2;
       roles.push_back(role == 0 && !queue_ahead ? 1 : role);
     }
-    MakeRedLightLeads(fnodes);
+    MakeRedLightLeads(fnodes, traffic);
     int ahead = 0, oncoming = 0, crossing = 0;
     const int n_oncoming = static_cast<int>(std::count(roles.begin(), roles.end(), 1));
     const int n_crossing = static_cast<int>(std::count(roles.begin(), roles.end(), 2));
@@ -1057,10 +1077,11 @@ class CityBuilder {
           return p;
         };
       }
-      PlaceMover(index, hl, hw, /*car=*/true, /*min_camera_m=*/3.15, 40, make);
+      PlaceMover(index, traffic.present, hl, hw, /*car=*/true, /*min_camera_m=*/3.15, 40, make);
       if (role == 0 && !two_lanes) {
-        ahead_speed = world_.objects[index].placement[0].path.speed_mps;
-        ahead_gap = world_.objects[index].placement[0].path.start_offset_m - f0;
+        const PathMotion& placed = world_.objects[index].placement[traffic.present[0] ? 0 : 1].path;
+        ahead_speed = placed.speed_mps;
+        ahead_gap = placed.start_offset_m - f0;
       }
     }
   }
@@ -1092,8 +1113,8 @@ class CityBuilder {
   // be 12-30 m ahead of the camera at a time spread over the pass; crossing_share of them
   // cross the route's street at a crosswalk ahead while the camera is 16-32 m away, or,
   // with red lights, over the crosswalk in front of the camera while it stands there.
-  void MakePedestrians() {
-    std::mt19937_64 rng = Rng("pedestrians");
+  void MakePedestrians(const Traffic& traffic) {
+    std::mt19937_64 rng = Rng("pedestrians" + traffic.tag);
     const int n = spec_.pedestrians;
     if (n <= 0) return;
     const double ext = 300.0;
@@ -1180,7 +1201,7 @@ class CityBuilder {
       }
       // The crosswalk in front of a standing camera car is 4 m from the camera.
       const double min_camera_m = k < crossers && !red_lights_.empty() ? 3.5 : 4.2;
-      PlaceMover(index, 0.3, 0.3, /*car=*/false, min_camera_m, 40, make);
+      PlaceMover(index, traffic.present, 0.3, 0.3, /*car=*/false, min_camera_m, 40, make);
     }
   }
 

@@ -65,6 +65,11 @@ struct CitySpec {
   // the light turns green; at the others it is first in line.
   int red_lights = 0;
   double red_light_s = 12.0;  // standing time at each light
+  // true: pass 2 has traffic of its own (other moving cars, lead vehicles and
+  // pedestrians, on other paths at other times), as a revisit on another day and the
+  // paper's second passes ("different ... moveable objects"); false: the same movers do
+  // the same things in both passes.
+  bool pass2_new_traffic = true;
 };
 
 struct OfficeSpec {

@@ -150,8 +150,9 @@ struct CameraSpec {
   double far_m = 200.0;
 };
 
-// What pass 2 changed, by instance id (sorted), and how many objects could change
-// (parked cars in a city; moveable rigid objects not under a sitter in an office).
+// What pass 2 changed of the objects that do not move, by instance id (sorted), and how
+// many objects could change (parked cars in a city; moveable rigid objects not under a
+// sitter in an office). Moving cars and people are left out: they are traffic.
 struct SecondPassChanges {
   int candidates = 0;
   std::vector<std::uint16_t> relocated;  // present in both passes, elsewhere in pass 2
