@@ -1091,9 +1091,11 @@ std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& ins
         const Impl::HistoryMeasurement history = s.MotionAgainstHistory(id, unmatched, T_wc, &judgement, &evidence);
         full_baseline = history.full_baseline;
         // The last resort: the instance was there a moment ago with enough features, yet
-        // none of them can be found again, and it has no map points of its own. A walker
-        // does that (limbs and folds change their look within a baseline); a rigid car
-        // seen again is measured above. Then the matches to other objects decide.
+        // none of them can be found again and none of its own map points measures it. A
+        // walker does that (limbs and folds change their look within a baseline); a rigid
+        // car seen again is measured by its history. Then the matches to other objects
+        // decide. Without it, walking_xyz with ground-truth masks finds its walkers moving
+        // in 23 % of the frames they are seen in instead of 45 % (coverage, segslam eval).
         if (judgement.num_points == 0 && history.found_instance) {
           for (int f : on_other_objects) {
             const size_t i = static_cast<size_t>(f);
