@@ -41,6 +41,16 @@ TrackerOptions StartingAt(const Eigen::Isometry3d& T_wc) {
   return options;
 }
 
+// The long-term map of a first visit: 30 frames along PathPose through `quads`, plain.
+LongTermMapData MapOfFirstVisit(const PinholeCamera& camera, const std::vector<testing::TexturedQuad>& quads,
+                                bool include_instances) {
+  Tracker mapper(camera, StartingAt(PathPose(0)));
+  for (int i = 0; i < 30; ++i) {
+    mapper.Track(RenderQuads(quads, camera, PathPose(i), i, i / 30.0).frame, nullptr, SlamMode::kPlain);
+  }
+  return mapper.ExportLongTermMap(include_instances);
+}
+
 TEST(TrackerTest, FollowsAKnownPathInATexturedRoom) {
   const PinholeCamera camera = TestCamera();
   const auto room = RoomQuads(1);
@@ -134,9 +144,7 @@ TEST(TrackerTest, RelocalizesAfterLosingTrack) {
 TEST(TrackerTest, LocalizesOnALoadedLongTermMapWithoutChangingIt) {
   const PinholeCamera camera = TestCamera();
   const auto room = RoomQuads(4);
-  Tracker mapper(camera, StartingAt(PathPose(0)));
-  for (int i = 0; i < 30; ++i) mapper.Track(RenderQuads(room, camera, PathPose(i), i, i / 30.0).frame, nullptr, SlamMode::kPlain);
-  const LongTermMapData map = mapper.ExportLongTermMap(true);
+  const LongTermMapData map = MapOfFirstVisit(camera, room, /*include_instances=*/true);
   ASSERT_GT(map.points.size(), 500u);
 
   // A second visit, 10 cm to the side, starting with no pose at all.
@@ -231,9 +239,7 @@ TEST(TrackerTest, MutualJudgesAMovingBoxMovingAndAStillBoxStatic) {
 TEST(TrackerTest, ObjectAddedSinceTheMapWasMadeIsJudgedStaticWhereItHidesMappedWalls) {
   const PinholeCamera camera = TestCamera();
   const auto room = RoomQuads(4);
-  Tracker mapper(camera, StartingAt(PathPose(0)));
-  for (int i = 0; i < 30; ++i) mapper.Track(RenderQuads(room, camera, PathPose(i), i, i / 30.0).frame, nullptr, SlamMode::kPlain);
-  const LongTermMapData map = mapper.ExportLongTermMap(false);
+  const LongTermMapData map = MapOfFirstVisit(camera, room, /*include_instances=*/false);
 
   // The back wall (x = 4 m) spans y in [-3, 3] and z in [0, 3] with a 768 x 768 texture
   // (columns along y, rows along z); the panel covers y in [-1.5, 1.5], z in [0.5, 2.5],
