@@ -11,6 +11,10 @@ namespace segslam::harness {
 
 namespace fs = std::filesystem;
 
+std::string SimulatedSegmenterLabel(const std::string& preset, double strength) {
+  return strength == 1.0 ? preset : fmt::format("{}@{}", preset, strength);
+}
+
 namespace {
 
 PassRun RunPass(const DatasetRunOptions& args, const std::string& name, const fs::path& sequence_dir,
@@ -24,6 +28,7 @@ PassRun RunPass(const DatasetRunOptions& args, const std::string& name, const fs
   options.masks = args.masks;
   options.segmenter = args.segmenter;
   options.segmenter_seed = args.seed;
+  options.segmenter_strength = args.strength;
   if (RunsMutualLoop(args)) options.refined_masks_dir = out_dir / "refined_masks";
   options.map_in = map_in;
   options.max_frames = args.frames;
@@ -39,7 +44,7 @@ PassRun RunPass(const DatasetRunOptions& args, const std::string& name, const fs
   fs::create_directories(out_dir);
   // The header says which masks gave the instance ids of frames.jsonl (eval needs it).
   const std::string masks = args.mode == "plain"       ? "none"
-                            : !args.segmenter.empty()  ? fmt::format("simulated {} seed {}", args.segmenter, args.seed)
+                            : !args.segmenter.empty()  ? fmt::format("simulated {} seed {}", SimulatedSegmenterLabel(args.segmenter, args.strength), args.seed)
                             : args.masks == "gt"       ? "gt"
                                                        : "external " + args.masks;
   WriteTumTrajectory(out_dir / "trajectory.txt", outcome.run.trajectory,

@@ -27,6 +27,7 @@ struct DatasetRunOptions {
   std::string masks = "gt";     // "gt" or a folder of external masks
   std::string segmenter;        // simulated segmenter preset; empty = none
   std::uint64_t seed = 1;       // the simulated segmenter's seed
+  double strength = 1.0;        // the simulated segmenter's error scale
   std::filesystem::path map_in;   // single sequence only: localize on this map
   std::filesystem::path map_out;  // where the (pass-1) long-term map goes; empty = default
   std::string camera_file;        // camera.yaml overriding the sequence's own
@@ -36,6 +37,10 @@ struct DatasetRunOptions {
   // Called after each frame with the pass's name, (done, total); may throw to cancel.
   std::function<void(const std::string&, int, int)> on_frame;
 };
+
+// A simulated segmenter preset as reports name it: "fcis-like", or "fcis-like@2" when its
+// errors are scaled (as SimulatedSegmenter::name() writes the strength).
+std::string SimulatedSegmenterLabel(const std::string& preset, double strength);
 
 // One sequence's run. `ate` is set where the sequence has ground truth and >= 3 poses
 // were estimated: pass 1 (or a single sequence) aligned by Horn's method, pass 2 moved by

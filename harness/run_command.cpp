@@ -34,6 +34,7 @@ struct RunArgs {
   std::string masks = "gt";
   std::string segmenter;  // a simulated segmenter preset; empty = none
   std::uint64_t seed = 1;
+  double strength = 1.0;  // scales the simulated segmenter's errors
   std::string map_in;
   std::string map_out;
   std::string out_dir;
@@ -85,10 +86,14 @@ int RunRun(const RunArgs& args) {
   if (!args.segmenter.empty() && args.masks != "gt") {
     throw Error("run: --segmenter " + args.segmenter + " and --masks " + args.masks + " exclude each other");
   }
+  if (args.strength != 1.0 && args.segmenter.empty()) {
+    throw Error("run: --strength scales the simulated segmenter's errors: give --segmenter too");
+  }
   const fs::path dataset(args.dataset);
   const fs::path out_dir = args.out_dir.empty() ? dataset / ("run_" + args.mode) : fs::path(args.out_dir);
   const std::string masks = args.mode == "plain"        ? "none"
-                            : !args.segmenter.empty()   ? "simulated " + args.segmenter + fmt::format(" (seed {})", args.seed)
+                            : !args.segmenter.empty()   ? fmt::format("simulated {} (seed {})",
+                                                                      SimulatedSegmenterLabel(args.segmenter, args.strength), args.seed)
                                                         : args.masks;
   fmt::print("segslam run: mode {}, masks {}{}\n", args.mode, masks,
              args.mode == "mutual" && masks != "gt" ? ", refined in the loop" : "");
@@ -97,6 +102,7 @@ int RunRun(const RunArgs& args) {
   options.masks = args.masks;
   options.segmenter = args.segmenter;
   options.seed = args.seed;
+  options.strength = args.strength;
   options.map_in = args.map_in;
   options.map_out = args.map_out;
   options.camera_file = args.camera_file;
@@ -147,6 +153,10 @@ void AddRunCommand(CLI::App& app, std::function<int()>* action) {
                   "mask-moveable: raw)")
       ->check(CLI::IsMember(seg::SimulatedSegmenterOptions::PresetNames()));
   cmd->add_option("--seed", args->seed, "Seed of the simulated segmenter")->capture_default_str();
+  cmd->add_option("--strength", args->strength,
+                  "Scale of the simulated segmenter's errors (0 = ground truth, 1 = the preset, 2 = twice as bad)")
+      ->check(CLI::Range(0.0, 10.0))
+      ->capture_default_str();
   cmd->add_option("--map-in", args->map_in, "Localize on this long-term map (single sequence)");
   cmd->add_option("--map-out", args->map_out, "Write the long-term map here (and a .ply beside it)");
   cmd->add_option("--out", args->out_dir, "Output folder (default DATASET/run_MODE)");

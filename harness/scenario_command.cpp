@@ -91,6 +91,25 @@ std::string Metres(const std::optional<ErrorStatistics>& ate) {
 
 }  // namespace
 
+BenchSettings EffectiveBench(const scenes::Scenario& scenario, const ScenarioRunRequest& request) {
+  BenchSettings bench = BenchSettings::FromYaml(scenario.bench, request.scenario_file);
+  if (!request.modes.empty()) {
+    bench.modes.clear();
+    std::string rest = request.modes;
+    for (std::size_t comma; (comma = rest.find(',')) != std::string::npos; rest = rest.substr(comma + 1)) {
+      bench.modes.push_back(rest.substr(0, comma));
+    }
+    bench.modes.push_back(rest);
+  }
+  if (request.repeats > 0) bench.repeats = request.repeats;
+  if (!request.segmenter.empty()) {
+    bench.segmenter = request.segmenter;
+    if (bench.segmenter == "gt") bench.segmenter_strength = 1.0;
+  }
+  if (const std::string problem = bench.Check(); !problem.empty()) throw Error("scenario run: " + problem);
+  return bench;
+}
+
 ScenarioReport RunScenarioToReport(const ScenarioRunRequest& args) {
   const auto start = std::chrono::steady_clock::now();
   // Everything that can be refused is checked before any work starts.
@@ -99,21 +118,11 @@ ScenarioReport RunScenarioToReport(const ScenarioRunRequest& args) {
     const auto [key, value] = SplitOverride(text);
     scenes::ApplyOverride(scenario, key, value);
   }
-  BenchSettings bench = BenchSettings::FromYaml(scenario.bench, args.scenario_file);
   // Thresholds are checked against the scenario's own modes (a mode it never runs is an
   // error in the file); --modes may then leave some of them out for this run.
-  std::vector<Expectation> expectations = ParseExpectations(scenario.expect, bench.modes, args.scenario_file);
-  if (!args.modes.empty()) {
-    bench.modes.clear();
-    std::string rest = args.modes;
-    for (std::size_t comma; (comma = rest.find(',')) != std::string::npos; rest = rest.substr(comma + 1)) {
-      bench.modes.push_back(rest.substr(0, comma));
-    }
-    bench.modes.push_back(rest);
-  }
-  if (args.repeats > 0) bench.repeats = args.repeats;
-  if (!args.segmenter.empty()) bench.segmenter = args.segmenter;
-  if (const std::string problem = bench.Check(); !problem.empty()) throw Error("scenario run: " + problem);
+  std::vector<Expectation> expectations = ParseExpectations(
+      scenario.expect, BenchSettings::FromYaml(scenario.bench, args.scenario_file).modes, args.scenario_file);
+  const BenchSettings bench = EffectiveBench(scenario, args);
   const auto runs = [&](const std::string& mode) {
     return mode.empty() || std::find(bench.modes.begin(), bench.modes.end(), mode) != bench.modes.end();
   };
@@ -135,7 +144,7 @@ ScenarioReport RunScenarioToReport(const ScenarioRunRequest& args) {
   const fs::path report_dir = args.out_dir.empty() ? fs::path("reports") / scenario.name : fs::path(args.out_dir);
   const fs::path dataset = fs::path(args.cache_dir) / (scenario.name + "-" + DatasetCacheKey(scenario, args.frames));
   fmt::print("segslam scenario run: {} ({}), modes {}, {} repeat(s), segmenter {}\n", scenario.name,
-             args.scenario_file, fmt::format("{}", fmt::join(bench.modes, ", ")), bench.repeats, bench.segmenter);
+             args.scenario_file, fmt::format("{}", fmt::join(bench.modes, ", ")), bench.repeats, bench.SegmenterLabel());
   for (const std::string& name : skipped) fmt::print("expectation {} not checked: --modes leaves its mode out\n", name);
 
   // The dataset, generated once per effective scenario and code version. The generator
@@ -185,6 +194,7 @@ ScenarioReport RunScenarioToReport(const ScenarioRunRequest& args) {
       options.mode = mode;
       if (mode != "plain" && bench.segmenter != "gt") options.segmenter = bench.segmenter;
       options.seed = run.seed;
+      options.strength = bench.segmenter_strength;
       std::optional<ProgressBar> bar;
       std::string bar_pass;
       // Each pass's rate counts from the end of the previous pass (or the run's start).

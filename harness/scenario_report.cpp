@@ -19,6 +19,7 @@
 #include "core/json_file.h"
 #include "core/pose.h"
 #include "core/tum_dataset.h"
+#include "harness/dataset_run.h"
 #include "harness/report_figures.h"
 #include "harness/slam_runner.h"
 #include "seg/external_masks.h"
@@ -137,7 +138,7 @@ std::vector<Table> ReportTables(const ScenarioReport& report) {
   tables.push_back(rpe);
 
   Table seg{"Segmentation in the loop, raw vs refined [%] (as the paper's Tables II and IV)",
-            spread_note + " Scored against the ground-truth masks with SLAM's poses; segmenter " + report.bench.segmenter + ".",
+            spread_note + " Scored against the ground-truth masks with SLAM's poses; segmenter " + report.bench.SegmenterLabel() + ".",
             {"sequence", "mode", "raw mAP", "raw AP50", "raw mIoU", "refined mAP", "refined AP50", "refined mIoU"},
             {}};
   for (const auto& pass : kPasses) {
@@ -306,8 +307,9 @@ void DrawMaskFigure(const ScenarioReport& report, const RepeatRun& run, const st
   // The raw masks are not saved: the simulated segmenter draws each frame from (seed,
   // frame index) alone, so with the run's preset and seed it gives again exactly the
   // masks the loop refined.
-  seg::SimulatedSegmenter segmenter(pass_dir, seg::SimulatedSegmenterOptions::Preset(report.bench.segmenter),
-                                    run.seed, report.bench.segmenter);
+  seg::SimulatedSegmenterOptions preset = seg::SimulatedSegmenterOptions::Preset(report.bench.segmenter);
+  preset.strength = report.bench.segmenter_strength;
+  seg::SimulatedSegmenter segmenter(pass_dir, preset, run.seed, report.bench.segmenter);
 
   // A dozen evenly spaced candidates keep this cheap on long sequences. The figure should
   // show refinement at work: frames with two or more ground-truth instances first, then
@@ -364,6 +366,7 @@ void DrawFeatureFigure(const ScenarioReport& report, const RepeatRun& run, const
   options.mode = slam::SlamMode::kMutual;
   if (report.bench.segmenter != "gt") options.segmenter = report.bench.segmenter;
   options.segmenter_seed = run.seed;
+  options.segmenter_strength = report.bench.segmenter_strength;
   options.max_frames = FramesRun(sequence, report);
   options.tracker.record_features = true;
   const SlamRunResult rerun = RunSlamOnSequence(sequence, options);
@@ -392,24 +395,27 @@ BenchSettings BenchSettings::FromYaml(const YAML::Node& bench, const std::string
   BenchSettings settings;
   if (!bench || bench.IsNull()) return settings;
   if (!bench.IsMap()) throw Error(origin + ": bench: expected a mapping");
-  try {
-    for (const auto& entry : bench) {
-      const std::string key = entry.first.as<std::string>();
-      const YAML::Node& value = entry.second;
+  for (const auto& entry : bench) {
+    const std::string key = entry.first.Scalar();
+    const YAML::Node& value = entry.second;
+    try {
       if (key == "modes") {
         settings.modes = value.IsSequence() ? value.as<std::vector<std::string>>() : Split(value.as<std::string>(), ',');
       } else if (key == "repeats") {
         settings.repeats = value.as<int>();
       } else if (key == "segmenter") {
         settings.segmenter = value.as<std::string>();
+      } else if (key == "segmenter_strength") {
+        settings.segmenter_strength = value.as<double>();
       } else if (key == "seed") {
         settings.seed = value.as<std::uint64_t>();
       } else {
-        throw Error(origin + ": unknown key 'bench." + key + "' (known: modes, repeats, segmenter, seed)");
+        throw Error(origin + ": unknown key 'bench." + key +
+                    "' (known: modes, repeats, segmenter, segmenter_strength, seed)");
       }
+    } catch (const YAML::Exception& e) {
+      throw Error(origin + ": bench." + key + ": " + e.msg);
     }
-  } catch (const YAML::Exception& e) {
-    throw Error(origin + ": bench: " + e.msg);
   }
   const std::string problem = settings.Check();
   if (!problem.empty()) throw Error(origin + ": bench: " + problem);
@@ -428,7 +434,17 @@ std::string BenchSettings::Check() const {
   if (segmenter != "gt" && !Contains(presets, segmenter)) {
     return "segmenter: unknown '" + segmenter + "' (gt or " + Join(presets, ", ") + ")";
   }
+  if (!(segmenter_strength >= 0 && segmenter_strength <= 10)) {
+    return fmt::format("segmenter_strength: must be in [0, 10] (got {})", segmenter_strength);
+  }
+  if (segmenter == "gt" && segmenter_strength != 1.0) {
+    return "segmenter_strength: scales a simulated segmenter's errors; ground-truth masks (gt) have none";
+  }
   return "";
+}
+
+std::string BenchSettings::SegmenterLabel() const {
+  return segmenter == "gt" ? segmenter : SimulatedSegmenterLabel(segmenter, segmenter_strength);
 }
 
 bool BenchSettings::ModeIsDeterministic(const std::string& mode) const { return mode == "plain" || segmenter == "gt"; }
@@ -590,7 +606,8 @@ nlohmann::json ScenarioReport::ToJson() const {
       {"dataset_from_cache", dataset_from_cache},
       {"frames_per_pass", frames_per_pass},
       {"bench",
-       {{"modes", bench.modes}, {"repeats", bench.repeats}, {"segmenter", bench.segmenter}, {"seed", bench.seed}}},
+       {{"modes", bench.modes}, {"repeats", bench.repeats}, {"segmenter", bench.segmenter},
+        {"segmenter_strength", bench.segmenter_strength}, {"seed", bench.seed}}},
       {"seconds", seconds},
       {"runs", nlohmann::json::array()},
       {"summary", nlohmann::json::object()},
@@ -635,7 +652,7 @@ ReportDocument ScenarioReport::ToDocument() const {
                                       (frames_per_pass > 0 ? fmt::format(", first {} frames per pass", frames_per_pass) : ""));
   document.AddMetadata("bench", fmt::format("modes {}, {} repeat(s), segmenter {} with seeds {}..{}; deterministic modes "
                                             "ran once",
-                                            Join(bench.modes, ", "), bench.repeats, bench.segmenter, bench.seed,
+                                            Join(bench.modes, ", "), bench.repeats, bench.SegmenterLabel(), bench.seed,
                                             bench.seed + static_cast<std::uint64_t>(bench.repeats) - 1));
   document.AddMetadata("result", fmt::format("{} in {:.1f} s", StatusLine(*this), seconds));
   for (const Table& table : ReportTables(*this)) {

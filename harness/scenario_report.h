@@ -37,6 +37,9 @@ struct BenchSettings {
   // Simulated segmenter preset (seg/simulated_segmenter.h) for mask-moveable and mutual;
   // "gt" uses the dataset's ground-truth masks (then every mode is deterministic).
   std::string segmenter = "fcis-like";
+  // Scales every error of the simulated segmenter: 0 = ground truth, 1 = the preset, 2 =
+  // twice as bad; a sweep axis for segmentation error strength. [0, 10].
+  double segmenter_strength = 1.0;
   std::uint64_t seed = 1;  // repeat r (0-based) uses seed + r
 
   // Throws segslam::Error naming `origin` and the key on unknown keys or bad values.
@@ -45,6 +48,8 @@ struct BenchSettings {
   std::string Check() const;
   // Without a simulated segmenter SLAM is deterministic: one run says everything.
   bool ModeIsDeterministic(const std::string& mode) const;
+  // The segmenter as reports name it: "gt", "fcis-like", "fcis-like@2".
+  std::string SegmenterLabel() const;
 };
 
 struct MetricName {

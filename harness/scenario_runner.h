@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "harness/scenario_report.h"
+#include "scenes/scenario.h"
 
 namespace segslam::harness {
 
@@ -23,6 +24,12 @@ struct ScenarioRunRequest {
   bool quiet = false;                  // no progress bars
   std::string progress_prefix;         // put before each progress line, e.g. "[point 2/5] "
 };
+
+// The bench settings a run of `scenario` (overrides applied) uses: its bench: section with
+// the request's modes, repeats and segmenter laid over it. --segmenter gt sets the
+// segmenter strength back to 1 (ground truth has no errors to scale). Throws
+// segslam::Error naming the scenario file on bad settings.
+BenchSettings EffectiveBench(const scenes::Scenario& scenario, const ScenarioRunRequest& request);
 
 // Loads the scenario with its overrides, checks bench settings and expect: thresholds
 // (throwing segslam::Error before any work on a bad one), generates the dataset or takes

@@ -32,9 +32,10 @@ std::unique_ptr<seg::Segmenter> MakeSegmenter(const TumSequence& sequence, const
       throw Error("run: --segmenter " + options.segmenter + " and --masks " + options.masks +
                   " exclude each other (the simulated segmenter degrades the ground-truth masks)");
     }
-    return std::make_unique<seg::SimulatedSegmenter>(
-        sequence.dir(), seg::SimulatedSegmenterOptions::Preset(options.segmenter), options.segmenter_seed,
-        options.segmenter);
+    seg::SimulatedSegmenterOptions preset = seg::SimulatedSegmenterOptions::Preset(options.segmenter);
+    preset.strength = options.segmenter_strength;
+    return std::make_unique<seg::SimulatedSegmenter>(sequence.dir(), preset, options.segmenter_seed,
+                                                     options.segmenter);
   }
   if (options.masks != "gt") return std::make_unique<seg::ExternalMaskSegmenter>(options.masks, sequence);
   return nullptr;

@@ -40,6 +40,9 @@ struct SlamRunOptions {
   // mask-moveable drops features on its raw masks; mutual refines them in the loop.
   std::string segmenter;
   std::uint64_t segmenter_seed = 1;
+  // Scales every error of the simulated segmenter (SimulatedSegmenterOptions::strength):
+  // 0 = ground truth, 1 = the preset, 2 = twice as bad.
+  double segmenter_strength = 1.0;
   // The loop's refiner options (mutual mode with a segmenter).
   seg::RefinerOptions refiner;
   // Where the loop writes each frame's refined masks, in the external-mask layout

@@ -26,6 +26,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "harness/commands.h"
+#include "harness/dataset_run.h"
 #include "harness/report_document.h"
 #include "harness/scenario_runner.h"
 #include "scenes/scenario.h"
@@ -192,7 +193,7 @@ int RunSuite(const SuiteArgs& args) {
                                               machine.value("cpu_model", std::string("?")), machine.value("cores", 0u)));
   const nlohmann::json bench = results.front()["bench"];
   document.AddMetadata("bench", fmt::format("{} repeat(s) per mode, segmenter {}, seeds from {}; median [min, max]",
-                                            bench.value("repeats", 0), bench.value("segmenter", std::string("?")),
+                                            bench.value("repeats", 0), SimulatedSegmenterLabel(bench.value("segmenter", std::string("?")), bench.value("segmenter_strength", 1.0)),
                                             bench.value("seed", 0)));
   std::string text;
   auto add_table = [&](const std::string& title, ReportTable table) {

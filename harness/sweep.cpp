@@ -14,6 +14,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/json_file.h"
+#include "harness/dataset_run.h"
 #include "harness/report_document.h"
 #include "harness/report_figures.h"
 
@@ -152,6 +153,107 @@ std::string SweepGrid::PointName(int index) const {
     if (!plain) c = '_';
   }
   return name.empty() ? "single" : name;
+}
+
+SweepGrid SweepGrid::WithSetOptions(const std::vector<std::string>& set_options) const {
+  SweepGrid grid = *this;
+  const SweepGrid given = FromSetOptions(set_options);
+  auto axis_of = [&grid](const std::string& key) {
+    return std::find_if(grid.axes.begin(), grid.axes.end(), [&key](const SweepAxis& a) { return a.key == key; });
+  };
+  for (const std::string& option : given.fixed_overrides) {
+    const auto axis = axis_of(option.substr(0, option.find('=')));
+    if (axis != grid.axes.end()) grid.axes.erase(axis);
+    grid.fixed_overrides.push_back(option);
+  }
+  for (const SweepAxis& axis : given.axes) {
+    const auto existing = axis_of(axis.key);
+    if (existing != grid.axes.end()) {
+      existing->values = axis.values;
+    } else {
+      grid.axes.push_back(axis);
+    }
+  }
+  return grid;
+}
+
+namespace {
+
+// One value of a sweep file as --set would spell it: a scalar's text, or a list in
+// YAML's flow style ("[0, 0.5, 0]").
+std::string ValueText(const YAML::Node& node) {
+  if (node.IsScalar()) return node.Scalar();
+  YAML::Emitter out;
+  out << YAML::Flow << node;
+  return out.c_str();
+}
+
+}  // namespace
+
+bool SweepFile::Recognize(const fs::path& file) {
+  try {
+    const YAML::Node root = YAML::LoadFile(file.string());
+    return root.IsMap() && root["axes"];
+  } catch (const YAML::Exception&) {
+    return false;  // not YAML at all: the scenario reader says what is wrong
+  }
+}
+
+SweepFile SweepFile::Load(const fs::path& file) {
+  const std::string origin = file.string();
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(origin);
+  } catch (const YAML::BadFile&) {
+    throw Error(origin + ": cannot open sweep file");
+  } catch (const YAML::ParserException& e) {
+    throw Error(origin + ": line " + std::to_string(e.mark.line + 1) + ": " + e.msg);
+  }
+  if (!root.IsMap()) throw Error(origin + ": a sweep file is a map with scenario: and axes:");
+  for (const auto& entry : root) {
+    const std::string key = entry.first.Scalar();
+    if (key != "name" && key != "scenario" && key != "set" && key != "axes") {
+      throw Error(origin + ": unknown key '" + key + "' (known: name, scenario, set, axes)");
+    }
+  }
+  SweepFile sweep;
+  sweep.name = root["name"] && root["name"].IsScalar() ? root["name"].Scalar() : file.stem().string();
+  if (!root["scenario"] || !root["scenario"].IsScalar()) {
+    throw Error(origin + ": scenario: the scenario file to sweep is needed");
+  }
+  sweep.scenario = (file.parent_path() / root["scenario"].Scalar()).lexically_normal();
+  if (!fs::exists(sweep.scenario)) throw Error(origin + ": scenario " + sweep.scenario.string() + ": no such file");
+  std::vector<std::string> set_options;
+  if (const YAML::Node set = root["set"]) {
+    if (!set.IsSequence()) throw Error(origin + ": set: expected a list of KEY=VALUE");
+    for (const YAML::Node& item : set) {
+      const std::string option = item.IsScalar() ? item.Scalar() : "";
+      const std::size_t equals = option.find('=');
+      if (equals == std::string::npos || equals == 0 || equals + 1 == option.size()) {
+        throw Error(origin + ": set: '" + option + "': expected KEY=VALUE");
+      }
+      sweep.grid.fixed_overrides.push_back(option);
+    }
+  }
+  const YAML::Node axes = root["axes"];
+  if (!axes.IsMap() || axes.size() == 0) {
+    throw Error(origin + ": axes: expected a map of KEY: [V1, V2, ...], e.g. office.people_walking: [0, 2, 4]");
+  }
+  for (const auto& entry : axes) {
+    SweepAxis axis;
+    axis.key = entry.first.Scalar();
+    if (!entry.second.IsSequence() || entry.second.size() < 2) {
+      throw Error(origin + ": axes: " + axis.key + ": expected a list of at least two values (one value goes in set:)");
+    }
+    for (const YAML::Node& value : entry.second) {
+      if (!value.IsScalar() && !value.IsSequence()) {
+        throw Error(origin + ": axes: " + axis.key + ": a value must be a number, a word or a list");
+      }
+      axis.values.push_back(ValueText(value));
+    }
+    sweep.grid.axes.push_back(axis);
+  }
+  return sweep;
 }
 
 nlohmann::json SweepGrid::ToJson() const {
@@ -323,7 +425,7 @@ std::string MergeSweep(const std::vector<fs::path>& inputs, const fs::path& out_
   }
   const nlohmann::json bench = results.front().value("bench", nlohmann::json::object());
   document.AddMetadata("bench", fmt::format("{} repeat(s) per mode, segmenter {}, seeds from {}",
-                                            bench.value("repeats", 0), bench.value("segmenter", std::string("?")),
+                                            bench.value("repeats", 0), SimulatedSegmenterLabel(bench.value("segmenter", std::string("?")), bench.value("segmenter_strength", 1.0)),
                                             bench.value("seed", 0)));
   document.AddHeading("Results per point", 2);
   document.AddTable(table);

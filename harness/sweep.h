@@ -15,6 +15,7 @@
 #include <vector>
 
 #include <nlohmann/json.hpp>
+#include <yaml-cpp/yaml.h>
 
 namespace segslam::harness {
 
@@ -33,6 +34,10 @@ struct SweepGrid {
 
   // Throws segslam::Error on a --set without '=' or with an empty value.
   static SweepGrid FromSetOptions(const std::vector<std::string>& set_options);
+  // This grid with command-line --set options laid over it: KEY=V1,V2,... replaces KEY's
+  // axis in place, or adds an axis after the others; KEY=VALUE fixes KEY for every point
+  // (its axis, if it had one, goes). Throws as FromSetOptions.
+  SweepGrid WithSetOptions(const std::vector<std::string>& set_options) const;
   int PointCount() const;
   // The assignments of point `index` (0-based, grid order): one KEY=VALUE per axis.
   std::vector<std::string> PointAssignments(int index) const;
@@ -41,6 +46,29 @@ struct SweepGrid {
   std::string PointName(int index) const;
   nlohmann::json ToJson() const;
   static SweepGrid FromJson(const nlohmann::json& json, const std::string& origin);
+};
+
+// A sweep file: a study in one file, run by `segslam sweep FILE` (scenarios/sweeps/):
+//
+//   name: office_density                    # optional; default the file's stem
+//   scenario: ../office_walking_xyz.yaml    # relative to the sweep file
+//   set: [bench.repeats=3]                  # optional: KEY=VALUE for every point
+//   axes:                                   # KEY: [V1, V2, ...]; the first varies slowest
+//     office.people_walking: [0, 1, 2, 3, 4]
+//
+// Keys are scenario keys, `bench.*` included (bench.segmenter_strength sweeps the
+// segmentation error strength). A value that is itself a list ([0, 0.5, 0]) is one value.
+struct SweepFile {
+  std::string name;
+  std::filesystem::path scenario;
+  SweepGrid grid;
+
+  // True for a YAML mapping with `axes:` at its top level (a scenario file has none).
+  static bool Recognize(const std::filesystem::path& file);
+  // Throws segslam::Error naming the file and the key on malformed YAML, an unknown key,
+  // a missing scenario, an axis with fewer than two values or a malformed set: entry.
+  // Whether the keys exist in the scenario is checked when the points are built.
+  static SweepFile Load(const std::filesystem::path& file);
 };
 
 // "i/n" with 1 <= i <= n; throws segslam::Error naming the text otherwise.

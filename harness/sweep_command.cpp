@@ -1,6 +1,6 @@
-// `segslam sweep SCENARIO --set key=v1,v2,...`: a scenario run per grid point
-// (harness/sweep.h), then the merged table and plots; `segslam sweep merge` joins the
-// folders of a sweep split with --shard.
+// `segslam sweep SCENARIO --set key=v1,v2,...` or `segslam sweep SWEEP_FILE`: a scenario
+// run per grid point (harness/sweep.h), then the merged table and plots; `segslam sweep
+// merge` joins the folders of a sweep split with --shard.
 #include <chrono>
 #include <cstdio>
 #include <fstream>
@@ -25,7 +25,8 @@ namespace {
 namespace fs = std::filesystem;
 
 struct SweepArgs {
-  ScenarioRunRequest run;  // the scenario file, modes, repeats, ... shared by every point
+  std::string file;        // a scenario file, or a sweep file (harness/sweep.h: SweepFile)
+  ScenarioRunRequest run;  // modes, repeats, ... shared by every point
   std::vector<std::string> set_options;
   std::string out_dir;
   std::string shard = "1/1";
@@ -52,23 +53,43 @@ bool PointIsDone(const fs::path& point_dir, const std::vector<std::string>& over
 
 int RunSweep(const SweepArgs& args) {
   const auto start = std::chrono::steady_clock::now();
-  const SweepGrid grid = SweepGrid::FromSetOptions(args.set_options);
+  // A sweep file brings its scenario and grid; --set lays over them.
+  std::optional<SweepFile> sweep_file_spec;
+  if (SweepFile::Recognize(args.file)) sweep_file_spec = SweepFile::Load(args.file);
+  ScenarioRunRequest run = args.run;
+  run.scenario_file = sweep_file_spec ? sweep_file_spec->scenario.string() : args.file;
+  const SweepGrid grid = sweep_file_spec ? sweep_file_spec->grid.WithSetOptions(args.set_options)
+                                         : SweepGrid::FromSetOptions(args.set_options);
   const Shard shard = Shard::Parse(args.shard);
-  // The scenario and every point's overrides are checked before the first run.
-  const scenes::Scenario base = scenes::LoadScenario(args.run.scenario_file);
+  // The scenario and every point's overrides (bench settings included) are checked
+  // before the first run.
+  const scenes::Scenario base = scenes::LoadScenario(run.scenario_file);
   const int points = grid.PointCount();
   for (int p = 0; p < points; ++p) {
     scenes::Scenario scenario = base;
     std::vector<std::string> overrides = grid.fixed_overrides;
     for (const std::string& assignment : grid.PointAssignments(p)) overrides.push_back(assignment);
-    for (const std::string& assignment : overrides) {
-      const std::size_t equals = assignment.find('=');
-      scenes::ApplyOverride(scenario, assignment.substr(0, equals), assignment.substr(equals + 1));
+    try {
+      for (const std::string& assignment : overrides) {
+        const std::size_t equals = assignment.find('=');
+        scenes::ApplyOverride(scenario, assignment.substr(0, equals), assignment.substr(equals + 1));
+      }
+      const BenchSettings bench = EffectiveBench(scenario, run);
+      for (const SweepAxis& axis : grid.axes) {
+        if (axis.key == "bench.segmenter_strength" && bench.segmenter == "gt") {
+          throw Error("sweep: bench.segmenter_strength scales a simulated segmenter's errors; the segmenter is gt");
+        }
+      }
+    } catch (const Error& e) {
+      if (!sweep_file_spec) throw;
+      throw Error(args.file + ": point " + grid.PointName(p) + ": " + e.what());
     }
   }
-  const fs::path out_dir = args.out_dir.empty() ? fs::path("reports") / (base.name + "-sweep") : fs::path(args.out_dir);
+  const std::string default_name = sweep_file_spec ? sweep_file_spec->name : base.name + "-sweep";
+  const fs::path out_dir = args.out_dir.empty() ? fs::path("reports") / default_name : fs::path(args.out_dir);
   fs::create_directories(out_dir);
-  const nlohmann::json sweep = {{"scenario_file", args.run.scenario_file}, {"grid", grid.ToJson()}};
+  nlohmann::json sweep = {{"scenario_file", run.scenario_file}, {"grid", grid.ToJson()}};
+  if (sweep_file_spec) sweep["sweep_file"] = args.file;
   const fs::path sweep_file = out_dir / "sweep.json";
   if (fs::exists(sweep_file)) {
     nlohmann::json existing;
@@ -92,7 +113,7 @@ int RunSweep(const SweepArgs& args) {
   for (int p = 0; p < points; ++p) {
     if (!shard.Owns(p)) continue;
     ++done;
-    ScenarioRunRequest request = args.run;
+    ScenarioRunRequest request = run;
     request.overrides = grid.fixed_overrides;
     for (const std::string& assignment : grid.PointAssignments(p)) request.overrides.push_back(assignment);
     request.out_dir = (out_dir / "points" / grid.PointName(p)).string();
@@ -144,9 +165,11 @@ void AddSweepCommand(CLI::App& app, std::function<int()>* action) {
   auto merge_args = std::make_shared<SweepMergeArgs>();
   CLI::App* sweep = app.add_subcommand(
       "sweep",
-      "A scenario run per point of a parameter grid (--set key=v1,v2,...), then a table and plots of ATE, "
-      "relocalization and mIoU against the parameter, per mode");
-  sweep->add_option("scenario", args->run.scenario_file, "Scenario YAML file");
+      "A scenario run per point of a parameter grid (a sweep file's axes, or --set key=v1,v2,...), then a "
+      "table and plots of ATE, relocalization and mIoU against the parameter, per mode");
+  sweep->add_option("file", args->file,
+                    "A scenario YAML file (the grid from --set), or a sweep file with its scenario and axes "
+                    "(scenarios/sweeps/)");
   sweep->add_option("--set", args->set_options,
                     "KEY=V1,V2,... sweeps KEY over the values; KEY=VALUE fixes it (repeatable; several lists make a "
                     "grid)");
@@ -171,7 +194,7 @@ void AddSweepCommand(CLI::App& app, std::function<int()>* action) {
 
   sweep->callback([sweep, args, action] {
     if (sweep->got_subcommand("merge")) return;
-    if (args->run.scenario_file.empty()) throw CLI::RequiredError("scenario");
+    if (args->file.empty()) throw CLI::RequiredError("file");
     *action = [args] { return RunSweep(*args); };
   });
 }

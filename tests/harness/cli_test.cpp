@@ -215,3 +215,14 @@ TEST_F(CliRunBadInputTest, UnknownModeIsRefused) {
   const fs::path sequence = GenerateTinySequence();
   ExpectRunFails(sequence.string() + " --mode dynaslam", "dynaslam");
 }
+
+// --strength scales the simulated segmenter's errors: alone it would silently do nothing.
+TEST_F(CliRunBadInputTest, StrengthWithoutASimulatedSegmenterIsRefused) {
+  const fs::path sequence = GenerateTinySequence();
+  ExpectRunFails(sequence.string() + " --mode mutual --strength 2", "give --segmenter too");
+  const CommandResult out_of_range =
+      RunSegslam("run " + sequence.string() + " --mode mutual --segmenter fcis-like --strength 12 -q");
+  EXPECT_NE(out_of_range.exit_code, 0);
+  EXPECT_NE(out_of_range.stderr_text.find("--strength: Value 12 not in range"), std::string::npos)
+      << out_of_range.stderr_text;
+}

@@ -101,5 +101,25 @@ TEST(ScenarioReportTest, BenchSectionIsChecked) {
   EXPECT_THROW(BenchSettings::FromYaml(YAML::Load("{segmenter: magic}"), "s.yaml"), Error);
 }
 
+TEST(ScenarioReportTest, SegmenterStrengthScalesOnlyASimulatedSegmenter) {
+  const BenchSettings preset = BenchSettings::FromYaml(YAML::Load("{segmenter: fcis-like}"), "s.yaml");
+  EXPECT_EQ(preset.segmenter_strength, 1.0);
+  EXPECT_EQ(preset.SegmenterLabel(), "fcis-like");
+  const BenchSettings doubled =
+      BenchSettings::FromYaml(YAML::Load("{segmenter: fcis-like, segmenter_strength: 2}"), "s.yaml");
+  EXPECT_EQ(doubled.segmenter_strength, 2.0);
+  EXPECT_EQ(doubled.SegmenterLabel(), "fcis-like@2");
+  for (const char* bad : {"{segmenter_strength: -1}", "{segmenter_strength: 11}", "{segmenter_strength: much}",
+                          "{segmenter: gt, segmenter_strength: 2}"}) {
+    try {
+      BenchSettings::FromYaml(YAML::Load(bad), "s.yaml");
+      ADD_FAILURE() << bad << ": accepted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("s.yaml"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("segmenter_strength"), std::string::npos) << e.what();
+    }
+  }
+}
+
 }  // namespace
 }  // namespace segslam::harness

@@ -1,6 +1,6 @@
-// The sweep's grid, shards and merge (harness/sweep.h), and `segslam sweep` end to end on
-// a tiny office: two shards merged give the same table as one run, and bad input is one
-// line.
+// The sweep's grid, sweep files, shards and merge (harness/sweep.h), and `segslam sweep`
+// end to end on a tiny office: two shards merged give the same table as one run, a sweep
+// file over the segmenter's error strength, and bad input is one line.
 #include "harness/sweep.h"
 
 #include <gtest/gtest.h>
@@ -12,6 +12,8 @@
 #include <string>
 
 #include "core/error.h"
+#include "harness/scenario_runner.h"
+#include "scenes/scenario.h"
 #include "tests/harness/cli_runner.h"
 
 namespace segslam::harness {
@@ -54,6 +56,111 @@ TEST(SweepGridTest, MalformedSetIsAnErrorNamingIt) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("sweep --set =4"), std::string::npos) << e.what();
   }
+}
+
+TEST(SweepGridTest, SetOptionsLayOverAGrid) {
+  SweepGrid grid;
+  grid.axes = {{"city.moving_cars", {"0", "8"}}, {"city.pedestrians", {"0", "20"}}};
+  grid.fixed_overrides = {"bench.repeats=3"};
+  const SweepGrid laid = grid.WithSetOptions(
+      {"city.moving_cars=0,4,8,16", "city.pedestrians=10", "bench.repeats=1", "city.crossing_share=0.1,0.5"});
+  // A list replaces the key's axis in place, or adds an axis at the end.
+  ASSERT_EQ(laid.axes.size(), 2u);
+  EXPECT_EQ(laid.axes[0].key, "city.moving_cars");
+  EXPECT_EQ(laid.axes[0].values, (std::vector<std::string>{"0", "4", "8", "16"}));
+  EXPECT_EQ(laid.axes[1].key, "city.crossing_share");
+  // One value fixes the key (its axis goes) and comes after the file's, so it wins.
+  EXPECT_EQ(laid.fixed_overrides,
+            (std::vector<std::string>{"bench.repeats=3", "city.pedestrians=10", "bench.repeats=1"}));
+  EXPECT_EQ(laid.PointCount(), 8);
+  EXPECT_THROW(grid.WithSetOptions({"city.moving_cars"}), Error);
+}
+
+class SweepFileTest : public segslam::testing::CliScratchTest {
+ protected:
+  SweepFileTest() : CliScratchTest("segslam_sweep_file_") {}
+
+  fs::path Write(const std::string& name, const std::string& text) {
+    const fs::path file = dir_ / name;
+    std::ofstream(file) << text;
+    return file;
+  }
+};
+
+TEST_F(SweepFileTest, LoadsScenarioFixedKeysAndAxes) {
+  fs::create_directories(dir_ / "scenarios" / "sweeps");
+  std::ofstream(dir_ / "scenarios" / "base.yaml") << "kind: office\n";
+  const fs::path file = Write("scenarios/sweeps/study.yaml",
+                              "scenario: ../base.yaml\nset: [bench.repeats=2, seed=5]\naxes:\n"
+                              "  office.people_walking: [0, 2, 4]\n"
+                              "  pass2.camera_offset_m: [[0, 0.2, 0], [0, 0.5, 0]]\n");
+  ASSERT_TRUE(SweepFile::Recognize(file));
+  EXPECT_FALSE(SweepFile::Recognize(dir_ / "scenarios" / "base.yaml"));
+  const SweepFile sweep = SweepFile::Load(file);
+  EXPECT_EQ(sweep.name, "study");  // the file's stem without name:
+  EXPECT_EQ(sweep.scenario, dir_ / "scenarios" / "base.yaml");
+  EXPECT_EQ(sweep.grid.fixed_overrides, (std::vector<std::string>{"bench.repeats=2", "seed=5"}));
+  ASSERT_EQ(sweep.grid.axes.size(), 2u);
+  EXPECT_EQ(sweep.grid.axes[0].key, "office.people_walking");
+  EXPECT_EQ(sweep.grid.axes[0].values, (std::vector<std::string>{"0", "2", "4"}));
+  // A list value is one value, spelt as --set would take it; it applies as a vector.
+  EXPECT_EQ(sweep.grid.axes[1].values, (std::vector<std::string>{"[0, 0.2, 0]", "[0, 0.5, 0]"}));
+  scenes::Scenario scenario = scenes::LoadScenario(sweep.scenario);
+  scenes::ApplyOverride(scenario, "pass2.camera_offset_m", sweep.grid.axes[1].values[1]);
+  EXPECT_DOUBLE_EQ(scenario.pass2.camera_offset_m.y(), 0.5);
+}
+
+TEST_F(SweepFileTest, BadFilesAreRefusedNamingFileAndKey) {
+  std::ofstream(dir_ / "base.yaml") << "kind: office\n";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"scenario: base.yaml\naxes: {office.people_walking: [0, 2]}\nrepeats: 3\n", "unknown key 'repeats'"},
+      {"axes: {office.people_walking: [0, 2]}\n", "scenario:"},
+      {"scenario: nowhere.yaml\naxes: {office.people_walking: [0, 2]}\n", "nowhere.yaml: no such file"},
+      {"scenario: base.yaml\naxes: {office.people_walking: [2]}\n", "office.people_walking: expected a list of at least two"},
+      {"scenario: base.yaml\naxes: {office.people_walking: 2}\n", "office.people_walking: expected a list"},
+      {"scenario: base.yaml\naxes: [office.people_walking]\n", "axes: expected a map"},
+      {"scenario: base.yaml\nset: [seed]\naxes: {office.people_walking: [0, 2]}\n", "set: 'seed': expected KEY=VALUE"},
+      {"scenario: base.yaml\naxes: {office.people_walking: [0, 2}\n", "line "},
+  };
+  for (const auto& [text, fragment] : cases) {
+    const fs::path file = Write("bad.yaml", text);
+    try {
+      SweepFile::Load(file);
+      ADD_FAILURE() << text << ": accepted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(file.string()), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << text << "\n" << e.what();
+    }
+  }
+}
+
+// Every shipped sweep file loads, and every one of its points is a valid scenario run.
+TEST(ShippedSweepFilesTest, EveryPointIsAValidRun) {
+  const fs::path folder = fs::path(SEGSLAM_SOURCE_DIR) / "scenarios" / "sweeps";
+  int files = 0;
+  for (const auto& entry : fs::directory_iterator(folder)) {
+    if (entry.path().extension() != ".yaml") continue;
+    ++files;
+    SCOPED_TRACE(entry.path().string());
+    ASSERT_TRUE(SweepFile::Recognize(entry.path()));
+    const SweepFile sweep = SweepFile::Load(entry.path());
+    EXPECT_GE(sweep.grid.PointCount(), 5);  // "at least five densities"
+    const scenes::Scenario base = scenes::LoadScenario(sweep.scenario);
+    for (int p = 0; p < sweep.grid.PointCount(); ++p) {
+      scenes::Scenario scenario = base;
+      std::vector<std::string> overrides = sweep.grid.fixed_overrides;
+      for (const std::string& assignment : sweep.grid.PointAssignments(p)) overrides.push_back(assignment);
+      for (const std::string& assignment : overrides) {
+        const std::size_t equals = assignment.find('=');
+        EXPECT_NO_THROW(scenes::ApplyOverride(scenario, assignment.substr(0, equals), assignment.substr(equals + 1)))
+            << assignment;
+      }
+      ScenarioRunRequest request;
+      request.scenario_file = sweep.scenario.string();
+      EXPECT_NO_THROW(EffectiveBench(scenario, request)) << sweep.grid.PointName(p);
+    }
+  }
+  EXPECT_GE(files, 3);
 }
 
 TEST(SweepShardTest, ShardsCoverEveryPointExactlyOnce) {
@@ -120,6 +227,40 @@ TEST_F(SweepCliTest, ShardsMergedEqualOneRun) {
   const CommandOutput again = Run("sweep " + common + " --out " + (dir_ / "whole").string());
   ASSERT_EQ(again.exit_code, 0) << again.stderr_text;
   EXPECT_NE(again.stdout_text.find("done before, kept"), std::string::npos) << again.stdout_text;
+}
+
+// A sweep file over the simulated segmenter's error strength: strength 0 is the ground
+// truth (raw mIoU 100), and raw masks get worse as it grows; --set narrows the file's axis.
+TEST_F(SweepCliTest, SweepFileOverSegmentationErrorStrength) {
+  const fs::path file = dir_ / "strength.yaml";
+  std::ofstream(file) << "name: strength_study\nscenario: " << kSmallOffice
+                      << "\nset: [bench.repeats=1, office.people_walking=1]\n"
+                      << "axes:\n  bench.segmenter_strength: [0, 1, 3, 5]\n";
+  const CommandOutput result = Run("sweep " + file.string() + " --set bench.segmenter_strength=0,3 --frames 12 " +
+                                   "--modes mutual -q --cache " + (dir_ / "cache").string() + " --out " +
+                                   (dir_ / "out").string());
+  ASSERT_EQ(result.exit_code, 0) << result.stdout_text << result.stderr_text;
+  EXPECT_NE(result.stdout_text.find("segmenter fcis-like@3"), std::string::npos) << result.stdout_text;
+  const nlohmann::json sweep = nlohmann::json::parse(ReadText(dir_ / "out" / "sweep.json"));
+  EXPECT_EQ(sweep["sweep_file"], file.string());
+  const nlohmann::json results = nlohmann::json::parse(ReadText(dir_ / "out" / "sweep_results.json"));
+  ASSERT_EQ(results["points"].size(), 2u);
+  auto raw_miou = [&](int p) {
+    return results["points"][p]["summary"]["pass1"]["mutual"]["seg_raw_miou"]["median"].get<double>();
+  };
+  EXPECT_EQ(results["points"][0]["assignments"], nlohmann::json::array({"bench.segmenter_strength=0"}));
+  EXPECT_NEAR(raw_miou(0), 1.0, 1e-9);
+  EXPECT_LT(raw_miou(1), 0.9);
+  const nlohmann::json point = nlohmann::json::parse(
+      ReadText(dir_ / "out" / "points" / "bench.segmenter_strength=3" / "results.json"));
+  EXPECT_EQ(point["bench"]["segmenter_strength"], 3.0);
+  // Without an --out the report goes to reports/<sweep name>; the strength axis needs a
+  // simulated segmenter, so --segmenter gt is refused before any work.
+  const CommandOutput refused = Run("sweep " + file.string() + " --segmenter gt -q --cache " + (dir_ / "cache2").string());
+  EXPECT_EQ(refused.exit_code, 1);
+  EXPECT_EQ(LineCount(refused.stderr_text), 1) << refused.stderr_text;
+  EXPECT_NE(refused.stderr_text.find("segmenter is gt"), std::string::npos) << refused.stderr_text;
+  EXPECT_FALSE(fs::exists(dir_ / "cache2"));
 }
 
 TEST_F(SweepCliTest, BadInputIsOneLineBeforeAnyWork) {
