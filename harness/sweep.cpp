@@ -406,7 +406,11 @@ std::string MergeSweep(const std::vector<fs::path>& inputs, const fs::path& out_
     plots.push_back({"sweep_miou_pass1.png", "pass1", "seg_refined_miou", "Segmentation in the loop (mutual), pass 1",
                      "mIoU", {"mutual"}});
   }
-  ReportDocument document("segslam sweep: " + results.front().value("scenario", std::string("?")));
+  const std::string scenario_name = results.front().value("scenario", std::string("?"));
+  ReportDocument document("segslam sweep: " + (sweep.contains("name") ? sweep["name"].get<std::string>() + " (" +
+                                                                            scenario_name + ")"
+                                                                      : scenario_name));
+  if (sweep.contains("sweep_file")) document.AddMetadata("sweep file", sweep["sweep_file"].get<std::string>());
   document.AddMetadata("scenario file", results.front().value("scenario_file", std::string("?")));
   document.AddMetadata("grid", [&] {
     std::vector<std::string> parts;
@@ -423,9 +427,19 @@ std::string MergeSweep(const std::vector<fs::path>& inputs, const fs::path& out_
                                                 machine.value("cpu_model", std::string("?")),
                                                 machine.value("cores", 0u)));
   }
+  // The segmenter can be an axis itself (bench.segmenter, bench.segmenter_strength).
+  std::vector<std::string> segmenters;
+  for (const nlohmann::json& r : results) {
+    const nlohmann::json point_bench = r.value("bench", nlohmann::json::object());
+    const std::string label = SimulatedSegmenterLabel(point_bench.value("segmenter", std::string("?")),
+                                                      point_bench.value("segmenter_strength", 1.0));
+    if (std::find(segmenters.begin(), segmenters.end(), label) == segmenters.end()) segmenters.push_back(label);
+  }
   const nlohmann::json bench = results.front().value("bench", nlohmann::json::object());
   document.AddMetadata("bench", fmt::format("{} repeat(s) per mode, segmenter {}, seeds from {}",
-                                            bench.value("repeats", 0), SimulatedSegmenterLabel(bench.value("segmenter", std::string("?")), bench.value("segmenter_strength", 1.0)),
+                                            bench.value("repeats", 0),
+                                            segmenters.size() == 1 ? segmenters.front()
+                                                                   : Join(segmenters, ", ") + " (per point)",
                                             bench.value("seed", 0)));
   document.AddHeading("Results per point", 2);
   document.AddTable(table);

@@ -89,7 +89,10 @@ int RunSweep(const SweepArgs& args) {
   const fs::path out_dir = args.out_dir.empty() ? fs::path("reports") / default_name : fs::path(args.out_dir);
   fs::create_directories(out_dir);
   nlohmann::json sweep = {{"scenario_file", run.scenario_file}, {"grid", grid.ToJson()}};
-  if (sweep_file_spec) sweep["sweep_file"] = args.file;
+  if (sweep_file_spec) {
+    sweep["sweep_file"] = args.file;
+    sweep["name"] = sweep_file_spec->name;
+  }
   const fs::path sweep_file = out_dir / "sweep.json";
   if (fs::exists(sweep_file)) {
     nlohmann::json existing;

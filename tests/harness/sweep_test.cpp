@@ -243,6 +243,9 @@ TEST_F(SweepCliTest, SweepFileOverSegmentationErrorStrength) {
   EXPECT_NE(result.stdout_text.find("segmenter fcis-like@3"), std::string::npos) << result.stdout_text;
   const nlohmann::json sweep = nlohmann::json::parse(ReadText(dir_ / "out" / "sweep.json"));
   EXPECT_EQ(sweep["sweep_file"], file.string());
+  const std::string report = ReadText(dir_ / "out" / "report.md");
+  EXPECT_NE(report.find("segslam sweep: strength\\_study"), std::string::npos) << report;  // '_' escaped
+  EXPECT_NE(report.find("segmenter fcis-like@0, fcis-like@3 (per point)"), std::string::npos) << report;
   const nlohmann::json results = nlohmann::json::parse(ReadText(dir_ / "out" / "sweep_results.json"));
   ASSERT_EQ(results["points"].size(), 2u);
   auto raw_miou = [&](int p) {
