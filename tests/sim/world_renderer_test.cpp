@@ -4,8 +4,6 @@
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
-#include <chrono>
-#include <cstdio>
 #include <set>
 
 #include "core/error.h"
@@ -236,41 +234,6 @@ TEST_F(BackendAgreementTest, BadWorldIsRefusedWithAnError) {
   world = MakeTestWorld();
   world.camera.near_m = 200;
   EXPECT_THROW(WorldRenderer(world, GlBackend::kOsmesa), Error);
-}
-
-// Not a timed assertion: logs ms per frame for both back-ends at 640x480 with ~500
-// geoms, so regressions are visible in the test log.
-TEST_F(BackendAgreementTest, LogRenderTimes) {
-  scenes::World world = MakeTestWorld();
-  world.camera.width = 640;
-  world.camera.height = 480;
-  for (int i = 0; i < 500; ++i) {
-    scenes::Geom g;
-    g.shape = i % 3 == 0 ? scenes::Shape::kBox
-                         : (i % 3 == 1 ? scenes::Shape::kCylinder : scenes::Shape::kSphere);
-    g.size = Eigen::Vector3d(0.1, 0.2, 0.1);
-    g.material = i % 2 == 0 ? 0 : 2;
-    g.T_parent_geom = testing::Translation(
-        Eigen::Vector3d(2.0 + (i % 10) * 0.3, -2.0 + (i / 10 % 10) * 0.4, 0.2 + (i / 100) * 0.5));
-    world.static_geoms.push_back(g);
-  }
-  for (GlBackend backend : {GlBackend::kOsmesa, GlBackend::kEgl}) {
-    for (int pass = 0; pass < 2; ++pass) {
-      RenderOptions options;
-      options.render_color = pass == 0;
-      options.render_ids = pass == 1;
-      WorldRenderer renderer(world, backend, options);
-      RenderTestFrame(&renderer);  // warm-up
-      const int frames = 5;
-      const auto t0 = std::chrono::steady_clock::now();
-      for (int i = 0; i < frames; ++i) RenderTestFrame(&renderer);
-      const double ms = std::chrono::duration<double, std::milli>(
-                            std::chrono::steady_clock::now() - t0).count() / frames;
-      std::printf("[render time] %s %s 640x480 %d geoms: %.1f ms/frame\n",
-                  GlBackendName(backend).c_str(), pass == 0 ? "color+depth" : "ids+depth",
-                  renderer.geom_count(), ms);
-    }
-  }
 }
 
 }  // namespace
