@@ -18,9 +18,13 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdint>
+#include <atomic>
+#include <exception>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <fmt/format.h>
@@ -28,6 +32,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/tum_dataset.h"
 #include "harness/commands.h"
 #include "harness/dataset_run.h"
 #include "harness/interrupt.h"
@@ -79,14 +84,124 @@ std::string DatasetCacheKey(const scenes::Scenario& scenario, int frames) {
   return fmt::format("{:016x}", Fnv1a64(key_text)).substr(0, 12);
 }
 
+std::string Metres(const std::optional<ErrorStatistics>& ate) {
+  return ate.has_value() ? fmt::format("{:.4f} m", ate->rmse) : "n/a";
+}
+
+// The line printed when a run ends, e.g. "[3/7] mutual        seed 2   pass1 ATE ...".
+std::string RunLine(const ScenarioRunRequest& args, int done_runs, int total_runs, const RepeatRun& run,
+                    bool deterministic) {
+  std::string line = fmt::format("{}[{}/{}] {:<13} {:<7}", args.progress_prefix, done_runs, total_runs, run.mode,
+                                 deterministic ? "" : fmt::format("seed {}", run.seed));
+  for (const PassEvaluation& pass : run.evaluation.passes) {
+    line += fmt::format("  {} ATE {} localized {:.0f}%", pass.name, Metres(pass.ate_m), 100 * pass.LocalizedShare());
+  }
+  return fmt::format("{}  ({:.1f} s)", line, run.seconds);
+}
+
+// Runs each of `runs` on the dataset (segslam run, then eval), args.jobs at a time, and
+// fills in its seconds and evaluation. A run is deterministic and uses one thread (plus
+// OpenCV's), so the results do not depend on how many run at once or in which order they
+// end. One job shows a progress bar per pass; several share one bar over all frames. The
+// first error stops the other runs and is rethrown.
+void RunRepeats(std::vector<RepeatRun>* runs, const BenchSettings& bench, const fs::path& dataset,
+                const fs::path& report_dir, const ScenarioRunRequest& args, const std::atomic<bool>* cancel) {
+  const int total_runs = static_cast<int>(runs->size());
+  const int jobs = std::clamp(args.jobs, 1, std::max(1, total_runs));
+  std::mutex output;  // guards printing, the shared bar and the counters below
+  int done_runs = 0;
+  std::atomic<bool> stop{false};
+  std::exception_ptr first_error;
+
+  // The shared bar counts frames over all runs: every run reads the same passes.
+  int frames_per_run = 0;
+  for (const char* pass : {"pass1", "pass2"}) {
+    const int frames = static_cast<int>(TumSequence::Open(dataset / pass).size());
+    frames_per_run += args.frames > 0 ? std::min(frames, args.frames) : frames;
+  }
+  std::vector<int> frames_done(runs->size(), 0);
+  std::optional<ProgressBar> shared_bar;
+  if (jobs > 1 && !args.quiet) {
+    shared_bar.emplace(fmt::format("{}{} runs, {} at a time", args.progress_prefix, total_runs, jobs));
+  }
+  const auto start = std::chrono::steady_clock::now();
+  auto last_draw = start;
+
+  auto run_one = [&](std::size_t index) {
+    RepeatRun& run = (*runs)[index];
+    const bool deterministic = bench.ModeIsDeterministic(run.mode);
+    DatasetRunOptions options;
+    options.mode = run.mode;
+    if (run.mode != "plain" && bench.segmenter != "gt") options.segmenter = bench.segmenter;
+    options.seed = run.seed;
+    options.strength = bench.segmenter_strength;
+    std::optional<ProgressBar> bar;
+    std::string bar_pass;
+    int pass1_frames = 0;
+    // Each pass's rate counts from the end of the previous pass (or the run's start).
+    auto pass_start = std::chrono::steady_clock::now();
+    options.on_frame = [&](const std::string& pass, int done, int total) {
+      if (cancel->load()) throw Error("scenario run: cancelled");
+      if (stop.load()) throw Error("scenario run: stopped after another run's error");
+      if (args.quiet) return;
+      const auto now = std::chrono::steady_clock::now();
+      if (jobs > 1) {
+        if (pass == "pass1") pass1_frames = total;
+        std::lock_guard<std::mutex> lock(output);
+        frames_done[index] = (pass == "pass1" ? 0 : pass1_frames) + done;
+        if (now - last_draw < std::chrono::milliseconds(200) && done != total) return;
+        last_draw = now;
+        int all_done = 0;
+        for (int frames : frames_done) all_done += frames;
+        const double seconds = std::max(std::chrono::duration<double>(now - start).count(), 1e-9);
+        shared_bar->Update(all_done, frames_per_run * total_runs, all_done / seconds,
+                           fmt::format("{} of {} runs done", done_runs, total_runs));
+        return;
+      }
+      if (!bar.has_value() || bar_pass != pass) {
+        if (bar.has_value()) bar->Finish();
+        bar.emplace(fmt::format("{}[{}/{}] {} {}", args.progress_prefix, index + 1, total_runs, run.mode, pass));
+        bar_pass = pass;
+      }
+      bar->Update(done, total, done / std::max(std::chrono::duration<double>(now - pass_start).count(), 1e-9));
+      if (done == total) pass_start = now;
+    };
+    const auto run_start = std::chrono::steady_clock::now();
+    RunDataset(dataset, report_dir / run.run_dir, options);
+    if (bar.has_value()) bar->Finish();
+    run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - run_start).count();
+    run.evaluation = EvaluateRun(report_dir / run.run_dir, dataset);
+    std::lock_guard<std::mutex> lock(output);
+    ++done_runs;
+    if (shared_bar.has_value()) shared_bar->Finish();
+    fmt::print("{}\n", RunLine(args, done_runs, total_runs, run, deterministic));
+    std::fflush(stdout);  // a CI log shows each run as it ends
+  };
+
+  std::atomic<std::size_t> next{0};
+  auto worker = [&] {
+    for (std::size_t index; !stop.load() && (index = next.fetch_add(1)) < runs->size();) {
+      try {
+        run_one(index);
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(output);
+        if (!first_error) first_error = std::current_exception();
+        stop = true;
+      }
+    }
+  };
+  std::vector<std::thread> threads;
+  for (int j = 1; j < jobs; ++j) threads.emplace_back(worker);
+  worker();
+  for (std::thread& thread : threads) thread.join();
+  if (shared_bar.has_value()) shared_bar->Finish();
+  if (first_error) std::rethrow_exception(first_error);
+}
+
 std::string EffectiveYaml(const scenes::Scenario& scenario) {
   YAML::Emitter yaml;
   yaml << scenes::ScenarioToYaml(scenario);
   return yaml.c_str();
-}
-
-std::string Metres(const std::optional<ErrorStatistics>& ate) {
-  return ate.has_value() ? fmt::format("{:.4f} m", ate->rmse) : "n/a";
 }
 
 }  // namespace
@@ -123,12 +238,12 @@ ScenarioReport RunScenarioToReport(const ScenarioRunRequest& args) {
   std::vector<Expectation> expectations = ParseExpectations(
       scenario.expect, BenchSettings::FromYaml(scenario.bench, args.scenario_file).modes, args.scenario_file);
   const BenchSettings bench = EffectiveBench(scenario, args);
-  const auto runs = [&](const std::string& mode) {
+  const auto mode_runs = [&](const std::string& mode) {
     return mode.empty() || std::find(bench.modes.begin(), bench.modes.end(), mode) != bench.modes.end();
   };
   std::vector<std::string> skipped;
   for (auto it = expectations.begin(); it != expectations.end();) {
-    if (runs(it->name.mode) && runs(it->name.denominator_mode)) {
+    if (mode_runs(it->name.mode) && mode_runs(it->name.denominator_mode)) {
       ++it;
     } else {
       skipped.push_back(it->name.text);
@@ -174,9 +289,8 @@ ScenarioReport RunScenarioToReport(const ScenarioRunRequest& args) {
   fs::remove_all(report_dir / "runs");
   fs::remove_all(report_dir / "figures");
   fs::create_directories(report_dir / "runs");
-  int total_runs = 0;
-  for (const std::string& mode : bench.modes) total_runs += bench.ModeIsDeterministic(mode) ? 1 : bench.repeats;
-  int done_runs = 0;
+  // Every run, in report order: each mode `repeats` times, a deterministic mode once.
+  std::vector<RepeatRun> runs;
   for (const std::string& mode : bench.modes) {
     const bool deterministic = bench.ModeIsDeterministic(mode);
     if (deterministic && bench.repeats > 1) {
@@ -190,43 +304,12 @@ ScenarioReport RunScenarioToReport(const ScenarioRunRequest& args) {
       run.repeat = repeat;
       run.seed = bench.seed + static_cast<std::uint64_t>(repeat);
       run.run_dir = (fs::path("runs") / mode / (deterministic ? std::string("once") : fmt::format("seed{}", run.seed))).string();
-      DatasetRunOptions options;
-      options.mode = mode;
-      if (mode != "plain" && bench.segmenter != "gt") options.segmenter = bench.segmenter;
-      options.seed = run.seed;
-      options.strength = bench.segmenter_strength;
-      std::optional<ProgressBar> bar;
-      std::string bar_pass;
-      // Each pass's rate counts from the end of the previous pass (or the run's start).
-      auto pass_start = std::chrono::steady_clock::now();
-      options.on_frame = [&](const std::string& pass, int done, int total) {
-        if (cancel->load()) throw Error("scenario run: cancelled");
-        if (args.quiet) return;
-        if (!bar.has_value() || bar_pass != pass) {
-          if (bar.has_value()) bar->Finish();
-          bar.emplace(fmt::format("{}[{}/{}] {} {}", args.progress_prefix, done_runs + 1, total_runs, mode, pass));
-          bar_pass = pass;
-        }
-        const auto now = std::chrono::steady_clock::now();
-        bar->Update(done, total, done / std::max(std::chrono::duration<double>(now - pass_start).count(), 1e-9));
-        if (done == total) pass_start = now;
-      };
-      const auto run_start = std::chrono::steady_clock::now();
-      RunDataset(dataset, report_dir / run.run_dir, options);
-      if (bar.has_value()) bar->Finish();
-      run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - run_start).count();
-      run.evaluation = EvaluateRun(report_dir / run.run_dir, dataset);
-      ++done_runs;
-      std::string line = fmt::format("{}[{}/{}] {:<13} {:<7}", args.progress_prefix, done_runs, total_runs, mode,
-                                     deterministic ? "" : fmt::format("seed {}", run.seed));
-      for (const PassEvaluation& pass : run.evaluation.passes) {
-        line += fmt::format("  {} ATE {} localized {:.0f}%", pass.name, Metres(pass.ate_m), 100 * pass.LocalizedShare());
-      }
-      fmt::print("{}  ({:.1f} s)\n", line, run.seconds);
-      std::fflush(stdout);  // a CI log shows each run as it ends
-      report.runs.push_back(std::move(run));
+      runs.push_back(std::move(run));
     }
   }
+  std::fflush(stdout);
+  RunRepeats(&runs, bench, dataset, report_dir, args, cancel);
+  report.runs = std::move(runs);
 
   report.scenario_name = scenario.name;
   report.scenario_file = args.scenario_file;
@@ -292,6 +375,9 @@ void AddScenarioCommand(CLI::App& app, std::function<int()>* action) {
   run->add_option("--segmenter", args->segmenter,
                   "Simulated segmenter preset for mask-moveable and mutual, or gt (default: bench.segmenter, else "
                   "fcis-like)");
+  run->add_option("--jobs,-j", args->jobs, "Runs at a time, each on its own thread (a run uses about one core; the results do not depend on it)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   run->add_option("--frames", args->frames, "Generate and run only the first N frames per pass (0 = all)")
       ->check(CLI::NonNegativeNumber);
   run->add_option("--junit", args->junit_file, "Also write JUnit XML, one testcase per expectation");

@@ -18,6 +18,7 @@ struct ScenarioRunRequest {
   int repeats = 0;                     // 0 = the scenario's bench.repeats
   std::string segmenter;               // empty = the scenario's bench.segmenter
   int frames = 0;                      // first N frames per pass; 0 = all
+  int jobs = 1;                        // runs at a time (each on its own thread)
   std::string junit_file;              // empty = no JUnit XML
   std::string gl = "osmesa";
   std::vector<std::string> overrides;  // KEY=VALUE scenario overrides (--set)

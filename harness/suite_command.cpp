@@ -290,6 +290,9 @@ void AddSuiteCommand(CLI::App& scenario, std::function<int()>* action) {
       ->check(CLI::PositiveNumber);
   suite->add_option("--modes", args->run.modes, "Comma-separated modes (default: each scenario's bench.modes)");
   suite->add_option("--segmenter", args->run.segmenter, "Simulated segmenter preset, or gt");
+  suite->add_option("--jobs,-j", args->run.jobs, "Runs at a time, each on its own thread (a run uses about one core; the results do not depend on it)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   suite->add_option("--frames", args->run.frames, "Only the first N frames per pass (0 = all)")
       ->check(CLI::NonNegativeNumber);
   suite->add_option("--cache", args->run.cache_dir, "Folder of cached datasets")->capture_default_str();

@@ -105,19 +105,31 @@ TEST_F(ScenarioCliTest, TinyRunWritesTheReportAndItsExitCodeFollowsTheThresholds
   EXPECT_EQ(Count(xml, "<testcase "), 3) << xml;
   EXPECT_EQ(Count(xml, "<failure"), 0) << xml;
 
-  // The thresholds are no part of the dataset: the second run reuses it and fails.
+  // The thresholds are no part of the dataset: the second run reuses it and fails. It
+  // runs three at a time, with the same results as one at a time.
   const fs::path failing = WriteScenario("failing",
                                          "bench: {segmenter: fcis-like, seed: 4}\n"
                                          "expect:\n"
                                          "  mutual.ate_rmse_m: {max: 0.0000001}\n"
                                          "  plain.localized_share: {min: 0.5}\n");
-  const CommandOutput fail = Run("scenario run " + failing.string() + common + " --out " + (dir_ / "report2").string() +
-                                 " --junit " + junit.string());
+  const CommandOutput fail = Run("scenario run " + failing.string() + common + " --jobs 3 --out " +
+                                 (dir_ / "report2").string() + " --junit " + junit.string());
   std::printf("%s", fail.stdout_text.c_str());
   EXPECT_EQ(fail.exit_code, 2) << fail.stderr_text;
   EXPECT_NE(fail.stdout_text.find("(cached)"), std::string::npos);
   EXPECT_NE(fail.stdout_text.find("FAIL  mutual.ate_rmse_m"), std::string::npos);
   EXPECT_NE(fail.stdout_text.find("1 of 2 expectations passed"), std::string::npos);
+  const nlohmann::json parallel = nlohmann::json::parse(ReadText(dir_ / "report2" / "results.json"));
+  ASSERT_EQ(parallel["runs"].size(), results["runs"].size());
+  for (std::size_t r = 0; r < results["runs"].size(); ++r) {
+    EXPECT_EQ(parallel["runs"][r]["seed"], results["runs"][r]["seed"]);
+    for (std::size_t p = 0; p < 2; ++p) {
+      for (const char* key : {"ate", "rpe", "localized_frames", "moving_detection", "segmentation"}) {
+        EXPECT_EQ(parallel["runs"][r]["evaluation"]["passes"][p][key], results["runs"][r]["evaluation"]["passes"][p][key])
+            << "run " << r << " pass " << p + 1 << " " << key;
+      }
+    }
+  }
   const std::string failed_xml = ReadText(junit);
   EXPECT_EQ(Count(failed_xml, "<testcase "), 2) << failed_xml;
   EXPECT_EQ(Count(failed_xml, "<failure"), 1) << failed_xml;
