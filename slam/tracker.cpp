@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <optional>
 #include <set>
 
 #include <opencv2/calib3d.hpp>
@@ -285,13 +286,21 @@ struct Tracker::Impl {
   std::vector<PoseObservation> Observations(const WorkingFrame& frame,
                                             std::vector<int>* feature_of_observation,
                                             bool skip_excluded) const {
+    return ObservationsOf(frame, feature_of_observation, [&](size_t i) {
+      return frame.points[i] != nullptr && !(skip_excluded && frame.excluded[i]) ? frame.points[i] : nullptr;
+    });
+  }
+
+  // The observations of the features for which `match(i)` gives a map point.
+  template <typename MatchOf>
+  std::vector<PoseObservation> ObservationsOf(const WorkingFrame& frame, std::vector<int>* feature_of_observation,
+                                              const MatchOf& match) const {
     std::vector<PoseObservation> observations;
     feature_of_observation->clear();
     const auto& inverse_sigma2 = extractor.inverse_level_sigma2();
     for (size_t i = 0; i < frame.points.size(); ++i) {
-      const MapPoint* point = frame.points[i];
+      const MapPoint* point = match(i);
       if (point == nullptr || point->bad) continue;
-      if (skip_excluded && frame.excluded[i]) continue;
       const cv::KeyPoint& kp = frame.features.keypoints[i];
       PoseObservation observation;
       observation.point_w = point->position_w;
@@ -328,6 +337,25 @@ struct Tracker::Impl {
       }
     }
     return inliers;
+  }
+
+  // The pose of the background alone: re-estimated from the coarse pose's matches (its
+  // rejected ones too) of the features on no instance of a moveable class. Empty when
+  // fewer than min_tracking_inliers of them fit.
+  std::optional<Eigen::Isometry3d> BackgroundPose(const std::unordered_set<std::uint16_t>& moveable_ids) const {
+    std::vector<int> feature_of;
+    const std::vector<PoseObservation> observations = ObservationsOf(current, &feature_of, [&](size_t i) {
+      const std::uint16_t id = current.instance[i];
+      if (id != 0 && moveable_ids.count(id) > 0) return static_cast<MapPoint*>(nullptr);
+      return current.points[i] != nullptr ? current.points[i] : current.rejected[i];
+    });
+    if (static_cast<int>(observations.size()) < options.min_tracking_inliers) return std::nullopt;
+    PoseOptimizerOptions pose_options;
+    pose_options.bf = bf;
+    const PoseOptimizationResult optimized = OptimizePose(current.T_cw, observations, camera, pose_options);
+    const auto inliers = std::count(optimized.inlier.begin(), optimized.inlier.end(), true);
+    if (inliers < options.min_tracking_inliers) return std::nullopt;
+    return optimized.T_cw;
   }
 
   // Best feature of the current frame for `descriptor` among `candidates` that have no
@@ -598,7 +626,7 @@ struct Tracker::Impl {
       evidence->Add(displacement, MovingDistanceThreshold(depth));
       return displacement.norm() > MovingDistanceThreshold(depth) ? 1 : 0;
     }
-    const Eigen::Vector3d p_c = current.T_cw * point->position_w;
+    const Eigen::Vector3d p_c = T_wc.inverse() * point->position_w;
     if (p_c.z() <= 0) return 1;
     const cv::KeyPoint& kp = current.features.keypoints[i];
     const double error = (camera.Project(p_c) - Eigen::Vector2d(kp.pt.x, kp.pt.y)).norm();
@@ -1045,8 +1073,14 @@ std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& ins
     s.current.instance[i] = id;
     if (id != 0) features_of[id].push_back(static_cast<int>(i));
   }
+  // Motion is measured against the background's pose where it can be had. The coarse
+  // pose comes from every feature, and instances that fill the view pull it along: then
+  // their own points agree with it whether they move or not (three walkers in front of
+  // the camera were cleared that way, and entered the fine pose).
+  const std::optional<Eigen::Isometry3d> background_T_cw =
+      s.coarse_ok ? s.BackgroundPose(instances.moveable_ids) : std::nullopt;
   std::vector<InstanceJudgement> judgements;
-  const Eigen::Isometry3d T_wc = s.current.T_cw.inverse();
+  const Eigen::Isometry3d T_wc = background_T_cw.value_or(s.current.T_cw).inverse();
   for (const auto& [id, features] : features_of) {
     InstanceJudgement judgement;
     judgement.id = id;

@@ -218,7 +218,12 @@ class Tracker {
   // Step 1. Returns the coarse T_wc, or nullopt when the frame cannot be tracked or
   // relocalized (then the frame is lost and the later steps only record that).
   std::optional<Eigen::Isometry3d> EstimateCoarsePose();
-  // Step 3 with the refined masks of this frame.
+  // Step 3 with the refined masks of this frame. Where DESIGN.md measures motion with
+  // the coarse pose, this measures it with the pose of the background (the coarse
+  // matches, rejected ones too, of the features on no moveable-class instance), when at
+  // least min_tracking_inliers of them fit; else with the coarse pose. Instances that
+  // fill the view pull the coarse pose along, and then agree with it whether they move
+  // or not.
   std::vector<InstanceJudgement> JudgeInstances(const FrameInstances& instances);
   // Step 4. Without JudgeInstances it equals the coarse pose.
   std::optional<Eigen::Isometry3d> EstimateFinePose();
