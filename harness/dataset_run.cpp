@@ -43,8 +43,10 @@ PassRun RunPass(const DatasetRunOptions& args, const std::string& name, const fs
 
   fs::create_directories(out_dir);
   // The header says which masks gave the instance ids of frames.jsonl (eval needs it).
+  const std::string simulated =
+      fmt::format("simulated {} seed {}", SimulatedSegmenterLabel(args.segmenter, args.strength), args.seed);
   const std::string masks = args.mode == "plain"       ? "none"
-                            : !args.segmenter.empty()  ? fmt::format("simulated {} seed {}", SimulatedSegmenterLabel(args.segmenter, args.strength), args.seed)
+                            : !args.segmenter.empty()  ? simulated
                             : args.masks == "gt"       ? "gt"
                                                        : "external " + args.masks;
   WriteTumTrajectory(out_dir / "trajectory.txt", outcome.run.trajectory,

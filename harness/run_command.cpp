@@ -91,9 +91,10 @@ int RunRun(const RunArgs& args) {
   }
   const fs::path dataset(args.dataset);
   const fs::path out_dir = args.out_dir.empty() ? dataset / ("run_" + args.mode) : fs::path(args.out_dir);
+  const std::string simulated =
+      fmt::format("simulated {} (seed {})", SimulatedSegmenterLabel(args.segmenter, args.strength), args.seed);
   const std::string masks = args.mode == "plain"        ? "none"
-                            : !args.segmenter.empty()   ? fmt::format("simulated {} (seed {})",
-                                                                      SimulatedSegmenterLabel(args.segmenter, args.strength), args.seed)
+                            : !args.segmenter.empty()   ? simulated
                                                         : args.masks;
   fmt::print("segslam run: mode {}, masks {}{}\n", args.mode, masks,
              args.mode == "mutual" && masks != "gt" ? ", refined in the loop" : "");

@@ -375,7 +375,9 @@ void AddScenarioCommand(CLI::App& app, std::function<int()>* action) {
   run->add_option("--segmenter", args->segmenter,
                   "Simulated segmenter preset for mask-moveable and mutual, or gt (default: bench.segmenter, else "
                   "fcis-like)");
-  run->add_option("--jobs,-j", args->jobs, "Runs at a time, each on its own thread (a run uses about one core; the results do not depend on it)")
+  run->add_option("--jobs,-j", args->jobs,
+                "Runs at a time, each on its own thread (a run uses about one core; the results do not "
+                "depend on it)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   run->add_option("--frames", args->frames, "Generate and run only the first N frames per pass (0 = all)")

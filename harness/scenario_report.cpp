@@ -138,7 +138,8 @@ std::vector<Table> ReportTables(const ScenarioReport& report) {
   tables.push_back(rpe);
 
   Table seg{"Segmentation in the loop, raw vs refined [%] (as the paper's Tables II and IV)",
-            spread_note + " Scored against the ground-truth masks with SLAM's poses; segmenter " + report.bench.SegmenterLabel() + ".",
+            spread_note + " Scored against the ground-truth masks with SLAM's poses; segmenter " +
+                report.bench.SegmenterLabel() + ".",
             {"sequence", "mode", "raw mAP", "raw AP50", "raw mIoU", "refined mAP", "refined AP50", "refined mIoU"},
             {}};
   for (const auto& pass : kPasses) {

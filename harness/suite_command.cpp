@@ -192,9 +192,10 @@ int RunSuite(const SuiteArgs& args) {
   document.AddMetadata("machine", fmt::format("{}, {}, {} cores", machine.value("hostname", std::string("?")),
                                               machine.value("cpu_model", std::string("?")), machine.value("cores", 0u)));
   const nlohmann::json bench = results.front()["bench"];
+  const std::string segmenter =
+      SimulatedSegmenterLabel(bench.value("segmenter", std::string("?")), bench.value("segmenter_strength", 1.0));
   document.AddMetadata("bench", fmt::format("{} repeat(s) per mode, segmenter {}, seeds from {}; median [min, max]",
-                                            bench.value("repeats", 0), SimulatedSegmenterLabel(bench.value("segmenter", std::string("?")), bench.value("segmenter_strength", 1.0)),
-                                            bench.value("seed", 0)));
+                                            bench.value("repeats", 0), segmenter, bench.value("seed", 0)));
   std::string text;
   auto add_table = [&](const std::string& title, ReportTable table) {
     if (table.rows.empty()) return;
@@ -290,7 +291,9 @@ void AddSuiteCommand(CLI::App& scenario, std::function<int()>* action) {
       ->check(CLI::PositiveNumber);
   suite->add_option("--modes", args->run.modes, "Comma-separated modes (default: each scenario's bench.modes)");
   suite->add_option("--segmenter", args->run.segmenter, "Simulated segmenter preset, or gt");
-  suite->add_option("--jobs,-j", args->run.jobs, "Runs at a time, each on its own thread (a run uses about one core; the results do not depend on it)")
+  suite->add_option("--jobs,-j", args->run.jobs,
+                  "Runs at a time, each on its own thread (a run uses about one core; the results do not "
+                  "depend on it)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   suite->add_option("--frames", args->run.frames, "Only the first N frames per pass (0 = all)")

@@ -183,7 +183,9 @@ void AddSweepCommand(CLI::App& app, std::function<int()>* action) {
       ->check(CLI::PositiveNumber);
   sweep->add_option("--modes", args->run.modes, "Comma-separated modes (default: the scenario's bench.modes)");
   sweep->add_option("--segmenter", args->run.segmenter, "Simulated segmenter preset, or gt");
-  sweep->add_option("--jobs,-j", args->run.jobs, "Runs at a time, each on its own thread (a run uses about one core; the results do not depend on it)")
+  sweep->add_option("--jobs,-j", args->run.jobs,
+                  "Runs at a time, each on its own thread (a run uses about one core; the results do not "
+                  "depend on it)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   sweep->add_option("--frames", args->run.frames, "Only the first N frames per pass (0 = all)")
