@@ -24,20 +24,12 @@ struct GenerateArgs {
   std::vector<std::string> overrides;
 };
 
-// "city.moving_cars=8" -> ("city.moving_cars", "8")
-std::pair<std::string, std::string> SplitOverride(const std::string& text) {
-  const auto equals = text.find('=');
-  if (equals == std::string::npos || equals == 0) {
-    throw Error("--set " + text + ": expected KEY=VALUE, e.g. city.moving_cars=8");
-  }
-  return {text.substr(0, equals), text.substr(equals + 1)};
-}
-
 int RunGenerate(const GenerateArgs& args) {
   scenes::Scenario scenario = scenes::LoadScenario(args.scenario_file);
-  for (const auto& text : args.overrides) {
-    const auto [key, value] = SplitOverride(text);
-    scenes::ApplyOverride(scenario, key, value);
+  try {
+    scenes::ApplyOverrides(scenario, args.overrides);
+  } catch (const Error& e) {
+    throw Error(std::string("--set ") + e.what());
   }
 
   sim::GenerateOptions options;

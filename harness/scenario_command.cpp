@@ -53,15 +53,6 @@ constexpr int kExitExpectationFailed = 2;
 
 using ScenarioRunArgs = ScenarioRunRequest;
 
-// "city.moving_cars=8" -> ("city.moving_cars", "8")
-std::pair<std::string, std::string> SplitOverride(const std::string& text) {
-  const auto equals = text.find('=');
-  if (equals == std::string::npos || equals == 0) {
-    throw Error("--set " + text + ": expected KEY=VALUE, e.g. city.moving_cars=8");
-  }
-  return {text.substr(0, equals), text.substr(equals + 1)};
-}
-
 // FNV-1a, 64 bit: stable across builds and machines, unlike std::hash.
 std::uint64_t Fnv1a64(const std::string& bytes) {
   std::uint64_t hash = 14695981039346656037ull;
@@ -229,9 +220,10 @@ ScenarioReport RunScenarioToReport(const ScenarioRunRequest& args) {
   const auto start = std::chrono::steady_clock::now();
   // Everything that can be refused is checked before any work starts.
   scenes::Scenario scenario = scenes::LoadScenario(args.scenario_file);
-  for (const auto& text : args.overrides) {
-    const auto [key, value] = SplitOverride(text);
-    scenes::ApplyOverride(scenario, key, value);
+  try {
+    scenes::ApplyOverrides(scenario, args.overrides);
+  } catch (const Error& e) {
+    throw Error(std::string("--set ") + e.what());
   }
   // Thresholds are checked against the scenario's own modes (a mode it never runs is an
   // error in the file); --modes may then leave some of them out for this run.

@@ -141,12 +141,10 @@ int RunSuite(const SuiteArgs& args) {
   // Every entry's scenario and overrides are checked before the first run.
   for (const SuiteEntry& entry : suite.entries) {
     scenes::Scenario scenario = scenes::LoadScenario(entry.scenario);
-    for (const std::string& assignment : entry.overrides) {
-      const std::size_t equals = assignment.find('=');
-      if (equals == std::string::npos || equals == 0) {
-        throw Error(args.suite_file + ": entry " + entry.name + ": set: expected KEY=VALUE, got '" + assignment + "'");
-      }
-      scenes::ApplyOverride(scenario, assignment.substr(0, equals), assignment.substr(equals + 1));
+    try {
+      scenes::ApplyOverrides(scenario, entry.overrides);
+    } catch (const Error& e) {
+      throw Error(args.suite_file + ": entry " + entry.name + ": set: " + e.what());
     }
   }
   const fs::path out_dir = args.out_dir.empty() ? fs::path("reports") / suite.name : fs::path(args.out_dir);

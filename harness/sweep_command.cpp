@@ -70,10 +70,7 @@ int RunSweep(const SweepArgs& args) {
     std::vector<std::string> overrides = grid.fixed_overrides;
     for (const std::string& assignment : grid.PointAssignments(p)) overrides.push_back(assignment);
     try {
-      for (const std::string& assignment : overrides) {
-        const std::size_t equals = assignment.find('=');
-        scenes::ApplyOverride(scenario, assignment.substr(0, equals), assignment.substr(equals + 1));
-      }
+      scenes::ApplyOverrides(scenario, overrides);
       const BenchSettings bench = EffectiveBench(scenario, run);
       for (const SweepAxis& axis : grid.axes) {
         if (axis.key == "bench.segmenter_strength" && bench.segmenter == "gt") {

@@ -494,4 +494,14 @@ void ApplyOverride(Scenario& scenario, const std::string& dotted_key, const std:
   scenario = std::move(edited);
 }
 
+void ApplyOverrides(Scenario& scenario, const std::vector<std::string>& assignments) {
+  for (const std::string& assignment : assignments) {
+    const std::size_t equals = assignment.find('=');
+    if (equals == std::string::npos || equals == 0) {
+      throw Error("'" + assignment + "': expected KEY=VALUE, e.g. city.moving_cars=8");
+    }
+    ApplyOverride(scenario, assignment.substr(0, equals), assignment.substr(equals + 1));
+  }
+}
+
 }  // namespace segslam::scenes

@@ -166,6 +166,24 @@ TEST(ScenarioTest, ApplyOverrideSetsValuesWithTheSameChecks) {
   EXPECT_EQ(code.office.frames, 77);
 }
 
+TEST(ScenarioTest, ApplyOverridesSplitsKeyAndValueAtTheFirstEquals) {
+  Scenario s = LoadScenario(ScenarioPath("city_two_pass.yaml"));
+  ApplyOverrides(s, {"city.moving_cars=12", "pass2.camera_offset_m=[0, 2, 0]", "seed=5", "name=a=b"});
+  EXPECT_EQ(s.name, "a=b");
+  EXPECT_EQ(s.city.moving_cars, 12);
+  EXPECT_DOUBLE_EQ(s.pass2.camera_offset_m.y(), 2.0);
+  EXPECT_EQ(s.seed, 5u);
+
+  for (const std::string bad : {"city.moving_cars", "=8"}) {
+    try {
+      ApplyOverrides(s, {"seed=6", bad});
+      FAIL() << bad;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("'" + bad + "': expected KEY=VALUE"), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(ScenarioTest, ToYamlRoundTrips) {
   Scenario s = LoadScenario(ScenarioPath("office_walking_rpy.yaml"));
   YAML::Emitter out;
