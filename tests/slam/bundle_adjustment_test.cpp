@@ -7,37 +7,16 @@
 #include <random>
 
 #include "core/error.h"
+#include "tests/slam/pose_test_util.h"
 
 namespace segslam::slam {
 namespace {
 
-constexpr double kBaseline = 0.08;
-
-PinholeCamera TestCamera() {
-  PinholeCamera camera;
-  camera.width = 640;
-  camera.height = 480;
-  camera.fx = camera.fy = 525;
-  camera.cx = 319.5;
-  camera.cy = 239.5;
-  return camera;
-}
-
-Eigen::Isometry3d MakePose(const Eigen::Vector3d& axis, double angle_deg,
-                           const Eigen::Vector3d& translation) {
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = Eigen::AngleAxisd(angle_deg * M_PI / 180.0, axis.normalized()).toRotationMatrix();
-  T.translation() = translation;
-  return T;
-}
-
-double CentreError(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
-  return (a.inverse().translation() - b.inverse().translation()).norm();
-}
-
-double RotationErrorDeg(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
-  return Eigen::AngleAxisd(a.linear().transpose() * b.linear()).angle() * 180.0 / M_PI;
-}
+using testing::CentreError;
+using testing::kBaseline;
+using testing::MakePose;
+using testing::RotationErrorDeg;
+using testing::TestCamera;
 
 struct Scene {
   std::vector<Eigen::Isometry3d> T_cw_true;
