@@ -9,6 +9,8 @@
 #include <numeric>
 #include <set>
 
+#include <opencv2/imgproc.hpp>
+
 namespace segslam::seg {
 namespace {
 
@@ -143,10 +145,12 @@ FrameContribution ScoreFrameContribution(const EvaluationOptions& options, const
       num_detections, std::vector<std::int64_t>(gt.size(), 0));
   for (size_t d = 0; d < num_detections; ++d) {
     const cv::Mat& mask = prediction.instances[d].mask;
-    for (int row = 0; row < mask.rows; ++row) {
+    // A detection covers a small part of the frame: scanning its box, not the frame.
+    const cv::Rect box = cv::boundingRect(mask);
+    for (int row = box.y; row < box.y + box.height; ++row) {
       const std::uint8_t* inside = mask.ptr<std::uint8_t>(row);
       const std::uint16_t* ids = gt_ids.ptr<std::uint16_t>(row);
-      for (int col = 0; col < mask.cols; ++col) {
+      for (int col = box.x; col < box.x + box.width; ++col) {
         if (inside[col] == 0) continue;
         ++detection_area[d];
         if (ids[col] != 0) ++intersection[d][gt_index_of_id[ids[col]]];
@@ -221,6 +225,11 @@ FrameContribution ScoreFrameContribution(const EvaluationOptions& options, const
     const InstanceMask& instance = prediction.instances[d];
     predicted_class.setTo(instance.category_id, instance.mask);
   }
+  // Counted per category in an array (a map lookup per pixel cost more than the rest of
+  // the frame's scoring), then kept for the categories that have pixels.
+  int max_category = 0;
+  for (const int category : categories) max_category = std::max(max_category, category);
+  std::vector<PixelCounts> pixels(static_cast<size_t>(max_category) + 1);
   for (int row = 0; row < gt_ids.rows; ++row) {
     const std::uint16_t* ids = gt_ids.ptr<std::uint16_t>(row);
     const std::uint16_t* predicted = predicted_class.ptr<std::uint16_t>(row);
@@ -228,12 +237,16 @@ FrameContribution ScoreFrameContribution(const EvaluationOptions& options, const
       const int truth = category_of_id[ids[col]];
       const int guess = predicted[col];
       if (truth == guess) {
-        if (truth != 0) ++frame.pixels[truth].true_positive;
+        if (truth != 0) ++pixels[static_cast<size_t>(truth)].true_positive;
         continue;
       }
-      if (truth != 0) ++frame.pixels[truth].false_negative;
-      if (guess != 0) ++frame.pixels[guess].false_positive;
+      if (truth != 0) ++pixels[static_cast<size_t>(truth)].false_negative;
+      if (guess != 0) ++pixels[static_cast<size_t>(guess)].false_positive;
     }
+  }
+  for (const int category : categories) {
+    const PixelCounts& counts = pixels[static_cast<size_t>(category)];
+    if (counts.true_positive + counts.false_positive + counts.false_negative > 0) frame.pixels[category] = counts;
   }
   return frame;
 }

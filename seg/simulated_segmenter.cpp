@@ -198,20 +198,32 @@ cv::Mat SmoothNoise(Rng* rng, cv::Size size, double scale) {
 // Displaces the boundary of the 0/1 mask by `amplitude_px` times a smooth random field.
 void JitterBoundary(Rng* rng, double amplitude_px, double scale_px, cv::Mat* mask) {
   if (amplitude_px <= 0 || cv::countNonZero(*mask) == 0) return;
+  const cv::Mat noise = SmoothNoise(rng, mask->size(), scale_px);
+  // Only pixels closer to the boundary than the largest displacement can change side,
+  // so the distances are needed in the object's box grown by that much, not in the whole
+  // mask (the distance transforms were a sixth of a mutual run's time). Within that box
+  // they are exact: every object pixel is inside it.
+  double noise_min = 0, noise_max = 0;
+  cv::minMaxLoc(noise, &noise_min, &noise_max);
+  const int reach = static_cast<int>(std::ceil(amplitude_px * std::max(-noise_min, noise_max))) + 2;
+  const cv::Rect object = cv::boundingRect(*mask);
+  const cv::Rect band = cv::Rect(object.x - reach, object.y - reach, object.width + 2 * reach,
+                                 object.height + 2 * reach) &
+                        cv::Rect(0, 0, mask->cols, mask->rows);
+  cv::Mat roi = (*mask)(band);
   cv::Mat inside, outside, not_mask;
-  cv::distanceTransform(*mask, inside, cv::DIST_L2, cv::DIST_MASK_PRECISE);
-  cv::compare(*mask, 0, not_mask, cv::CMP_EQ);
+  cv::distanceTransform(roi, inside, cv::DIST_L2, cv::DIST_MASK_PRECISE);
+  cv::compare(roi, 0, not_mask, cv::CMP_EQ);
   cv::distanceTransform(not_mask, outside, cv::DIST_L2, cv::DIST_MASK_PRECISE);
   // Signed distance to the boundary: +-0.5 at the pixels either side of it, growing
   // inward (positive) and outward (negative).
   cv::Mat inside_f;
-  mask->convertTo(inside_f, CV_32F);
+  roi.convertTo(inside_f, CV_32F);
   cv::Mat signed_distance = inside - outside + 0.5f - inside_f;
-  const cv::Mat noise = SmoothNoise(rng, mask->size(), scale_px);
-  cv::Mat displaced = signed_distance + static_cast<float>(amplitude_px) * noise;
+  cv::Mat displaced = signed_distance + static_cast<float>(amplitude_px) * noise(band);
   cv::Mat result;
   cv::compare(displaced, 0, result, cv::CMP_GT);
-  result.convertTo(*mask, CV_8U, 1.0 / 255.0);
+  result.convertTo(roi, CV_8U, 1.0 / 255.0);
 }
 
 // Replaces the 0/1 mask inside `box` by what a mask head of `resolution` x `resolution`
