@@ -575,7 +575,7 @@ Figure DrawLinePlot(const LinePlotOptions& options, const std::vector<double>& x
                                                  Marker::kDiamond, Marker::kInvertedTriangle};
   std::vector<LegendEntry> legend;
   for (size_t k = 0; k < series.size(); ++k) {
-    legend.push_back({series[k].name, SeriesColor(k), 2, kMarkers[k % kMarkers.size()]});
+    legend.push_back({series[k].name, SeriesColor(k), 2, options.markers ? kMarkers[k % kMarkers.size()] : Marker::kNone});
   }
 
   // Each series in pixels: line pieces (broken at missing values), markers, error bars.
@@ -599,7 +599,7 @@ Figure DrawLinePlot(const LinePlotOptions& options, const std::vector<double>& x
           continue;
         }
         pixels.lines.back().push_back(at(i, s.y[i]));
-        pixels.markers.push_back(at(i, s.y[i]));
+        if (options.markers) pixels.markers.push_back(at(i, s.y[i]));
         const double lo = s.y_min.empty() ? NAN : s.y_min[i];
         const double hi = s.y_max.empty() ? NAN : s.y_max[i];
         if (std::isfinite(lo) || std::isfinite(hi)) {

@@ -89,10 +89,12 @@ struct LinePlotOptions {
   cv::Size size{900, 600};
   // Start the y axis at 0 when every value is non-negative (errors, counts).
   bool y_from_zero = true;
+  // A marker per point; off for dense series (a value per frame), which are lines only.
+  bool markers = true;
   bool IsValid(std::string* error) const;
 };
 
-// Lines with a marker per point (a different shape per series), vertical min/max error
+// Lines with a marker per point (a different shape per series; options.markers), vertical min/max error
 // bars with caps, slightly offset per series so bars of equal x stay apart. The x ticks
 // are the x values themselves when there are at most 12 of them, else a nice grid.
 // Throws segslam::Error on invalid options, no x values, x not strictly increasing, or a

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <set>
 #include <tuple>
@@ -228,6 +229,19 @@ AteResult ComputeAte(const std::vector<StampedPose>& ground_truth,
   }
   result.translation_m = ComputeErrorStatistics(errors);
   return result;
+}
+
+std::vector<double> PositionErrorPerFrame(const std::vector<StampedPose>& ground_truth,
+                                          const std::vector<StampedPose>& estimate, double max_difference_s) {
+  std::vector<double> errors(ground_truth.size(), std::numeric_limits<double>::quiet_NaN());
+  const std::vector<StampAssociation> matches = AssociateStamps(
+      StampsOf(ground_truth, "ground-truth"), StampsOf(estimate, "estimate"), max_difference_s);
+  for (const StampAssociation& match : matches) {
+    const Eigen::Vector3d difference =
+        estimate[match.second_index].T_wc.translation() - ground_truth[match.first_index].T_wc.translation();
+    errors[match.first_index] = difference.norm();
+  }
+  return errors;
 }
 
 RpeResult ComputeRpe(const std::vector<StampedPose>& ground_truth,

@@ -85,6 +85,14 @@ struct AteResult {
 AteResult ComputeAte(const std::vector<StampedPose>& ground_truth,
                      const std::vector<StampedPose>& estimate, const AteOptions& options = {});
 
+// The position error of `estimate` at each ground-truth pose, in the given frames (no
+// alignment: align the estimate first where it needs it), associated as ComputeAte
+// associates; NaN at ground-truth poses no estimate pose associates with. All NaN when
+// none does. For plots of where along a run its error builds up.
+std::vector<double> PositionErrorPerFrame(const std::vector<StampedPose>& ground_truth,
+                                          const std::vector<StampedPose>& estimate,
+                                          double max_difference_s = AteOptions{}.max_difference_s);
+
 enum class RpeDeltaUnit { kSeconds, kFrames };
 
 struct RpeOptions {

@@ -191,6 +191,25 @@ TEST(LinePlotTest, PointsAndErrorBarsAreWhereTheValuesAre) {
   }
 }
 
+TEST(LinePlotTest, DenseSeriesCanBeDrawnWithoutMarkers) {
+  const std::vector<double> x = {0, 1, 2, 3, 4};
+  const PlotSeries flat{"error", {1, 1, 1, 1, 1}, {}, {}};
+  for (const bool markers : {true, false}) {
+    LinePlotOptions options;
+    options.markers = markers;
+    const Figure figure = DrawLinePlot(options, x, {flat});
+    // Three pixels above a point on the horizontal line: inside a marker, else background
+    // (and the vertical grid line through the tick there).
+    const cv::Point above = Rounded(figure.axes.ToPixel(2, 1)) + cv::Point(0, -3);
+    EXPECT_LT(ColorDistance(figure.image, Rounded(figure.axes.ToPixel(2.5, 1)), SeriesColor(0)), kNearColor);
+    if (markers) {
+      EXPECT_LT(ColorDistance(figure.image, above, SeriesColor(0)), kNearColor);
+    } else {
+      EXPECT_GT(ColorDistance(figure.image, above, SeriesColor(0)), kNearColor);
+    }
+  }
+}
+
 TEST(LinePlotTest, RefusesMismatchedSeries) {
   LinePlotOptions options;
   EXPECT_THROW(DrawLinePlot(options, {}, {}), Error);

@@ -75,8 +75,8 @@ TEST_F(ScenarioCliTest, TinyRunWritesTheReportAndItsExitCodeFollowsTheThresholds
   ASSERT_EQ(pass.exit_code, 0) << pass.stdout_text << pass.stderr_text;
   EXPECT_NE(pass.stdout_text.find("3 of 3 expectations passed"), std::string::npos);
   for (const char* file : {"results.json", "report.md", "report.html", "figures/trajectories_pass1.png",
-                           "figures/trajectories_pass2.png", "figures/masks_raw_vs_refined.png",
-                           "figures/features_kept_vs_dropped.png"}) {
+                           "figures/trajectories_pass2.png", "figures/error_pass1.png", "figures/error_pass2.png",
+                           "figures/masks_raw_vs_refined.png", "figures/features_kept_vs_dropped.png"}) {
     EXPECT_TRUE(fs::exists(report / file)) << file;
   }
   EXPECT_EQ(pass.stdout_text.find("figure not drawn"), std::string::npos) << pass.stdout_text;
@@ -96,8 +96,8 @@ TEST_F(ScenarioCliTest, TinyRunWritesTheReportAndItsExitCodeFollowsTheThresholds
   EXPECT_NE(markdown.find("per sequence and mode (as the paper's Table I)"), std::string::npos);
   EXPECT_NE(markdown.find("Relocalization in pass 2"), std::string::npos);
   EXPECT_NE(markdown.find("raw vs refined"), std::string::npos);
-  for (const char* figure : {"figures/trajectories_pass2.png", "figures/masks_raw_vs_refined.png",
-                             "figures/features_kept_vs_dropped.png"}) {
+  for (const char* figure : {"figures/trajectories_pass2.png", "figures/error_pass2.png",
+                             "figures/masks_raw_vs_refined.png", "figures/features_kept_vs_dropped.png"}) {
     EXPECT_NE(markdown.find(figure), std::string::npos) << figure;
     EXPECT_NE(ReadText(report / "report.html").find(figure), std::string::npos) << figure;
   }

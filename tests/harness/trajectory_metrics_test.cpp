@@ -213,6 +213,39 @@ TEST(AteTest, WithoutAlignmentErrorsAreRawDistances) {
   EXPECT_EQ(ComputeAte(box.ground_truth, box.estimate, options).translation_m.count, 1u);
 }
 
+TEST(PositionErrorPerFrameTest, OneValuePerGroundTruthPoseNanWhereNothingAssociates) {
+  std::vector<StampedPose> ground_truth;
+  for (int i = 0; i < 5; ++i) {
+    StampedPose pose;
+    pose.stamp_s = 0.1 * i;
+    pose.T_wc.translation() = Eigen::Vector3d(i, 0, 0);
+    ground_truth.push_back(pose);
+  }
+  // Estimates at frames 0, 1 (5 ms late) and 3 (30 ms late: beyond the 0.02 s radius), off
+  // by known vectors; frames 2 and 4 have none.
+  std::vector<StampedPose> estimate(3);
+  estimate[0].stamp_s = 0.0;
+  estimate[0].T_wc.translation() = Eigen::Vector3d(0, 0.03, 0.04);
+  estimate[1].stamp_s = 0.105;
+  estimate[1].T_wc.translation() = Eigen::Vector3d(1.01, 0, 0);
+  estimate[2].stamp_s = 0.33;
+  estimate[2].T_wc.translation() = Eigen::Vector3d(3, 0, 0);
+
+  const std::vector<double> errors = PositionErrorPerFrame(ground_truth, estimate);
+  ASSERT_EQ(errors.size(), 5u);
+  EXPECT_NEAR(errors[0], 0.05, 1e-12);
+  EXPECT_NEAR(errors[1], 0.01, 1e-12);
+  for (const int missing : {2, 3, 4}) EXPECT_TRUE(std::isnan(errors[static_cast<size_t>(missing)])) << missing;
+  // Where frames associate, the same errors as the ATE's pairs.
+  AteOptions in_place;
+  in_place.align = false;
+  const AteResult ate = ComputeAte(ground_truth, estimate, in_place);
+  ASSERT_EQ(ate.pairs.size(), 2u);
+  EXPECT_DOUBLE_EQ(ate.pairs[1].error_m, errors[1]);
+
+  for (const double error : PositionErrorPerFrame(ground_truth, {})) EXPECT_TRUE(std::isnan(error));
+}
+
 TEST(AteTest, NoOverlapAndTooFewPairsAreClearErrors) {
   BoxTrajectories box = MakeBoxTrajectories();
   std::vector<StampedPose> later = box.estimate;
