@@ -575,7 +575,8 @@ Figure DrawLinePlot(const LinePlotOptions& options, const std::vector<double>& x
                                                  Marker::kDiamond, Marker::kInvertedTriangle};
   std::vector<LegendEntry> legend;
   for (size_t k = 0; k < series.size(); ++k) {
-    legend.push_back({series[k].name, SeriesColor(k), 2, options.markers ? kMarkers[k % kMarkers.size()] : Marker::kNone});
+    const Marker marker = options.markers ? kMarkers[k % kMarkers.size()] : Marker::kNone;
+    legend.push_back({series[k].name, SeriesColor(k), 2, marker});
   }
 
   // Each series in pixels: line pieces (broken at missing values), markers, error bars.
