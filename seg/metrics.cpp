@@ -141,12 +141,14 @@ FrameContribution ScoreFrameContribution(const EvaluationOptions& options, const
   // ground truth is a label image, so one pass over the mask gives all intersections).
   const size_t num_detections = prediction.instances.size();
   std::vector<std::int64_t> detection_area(num_detections, 0);
+  std::vector<cv::Rect> detection_box(num_detections);
   std::vector<std::vector<std::int64_t>> intersection(
       num_detections, std::vector<std::int64_t>(gt.size(), 0));
   for (size_t d = 0; d < num_detections; ++d) {
     const cv::Mat& mask = prediction.instances[d].mask;
     // A detection covers a small part of the frame: scanning its box, not the frame.
     const cv::Rect box = cv::boundingRect(mask);
+    detection_box[d] = box;
     for (int row = box.y; row < box.y + box.height; ++row) {
       const std::uint8_t* inside = mask.ptr<std::uint8_t>(row);
       const std::uint16_t* ids = gt_ids.ptr<std::uint16_t>(row);
@@ -223,7 +225,7 @@ FrameContribution ScoreFrameContribution(const EvaluationOptions& options, const
   });
   for (size_t d : paint_order) {
     const InstanceMask& instance = prediction.instances[d];
-    predicted_class.setTo(instance.category_id, instance.mask);
+    predicted_class(detection_box[d]).setTo(instance.category_id, instance.mask(detection_box[d]));
   }
   // Counted per category in an array (a map lookup per pixel cost more than the rest of
   // the frame's scoring), then kept for the categories that have pixels.
