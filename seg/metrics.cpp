@@ -227,8 +227,8 @@ FrameContribution ScoreFrameContribution(const EvaluationOptions& options, const
     const InstanceMask& instance = prediction.instances[d];
     predicted_class(detection_box[d]).setTo(instance.category_id, instance.mask(detection_box[d]));
   }
-  // Counted per category in an array (a map lookup per pixel cost more than the rest of
-  // the frame's scoring), then kept for the categories that have pixels.
+  // Counted per category in an array, which is cheaper than a map lookup per pixel, then
+  // kept for the categories that have pixels.
   int max_category = 0;
   for (const int category : categories) max_category = std::max(max_category, category);
   std::vector<PixelCounts> pixels(static_cast<size_t>(max_category) + 1);
