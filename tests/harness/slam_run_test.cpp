@@ -183,5 +183,35 @@ TEST(SlamRunTest, MapFromAnotherCameraIsRefused) {
   fs::remove(map_file);
 }
 
+// Frames are read ahead on another thread; a frame that cannot be read still stops the
+// run with an error naming its file, in the modes with and without the mutual loop.
+TEST(SlamRunTest, UnreadableFrameStopsTheRunNamingTheFile) {
+  const fs::path source = kDataDir / "office_clean" / "pass1";
+  RequireDataset(source);
+  const fs::path copy = fs::path(::testing::TempDir()) / "slam_run_test_unreadable_frame";
+  fs::remove_all(copy);
+  fs::copy(source, copy, fs::copy_options::recursive);
+  const TumSequence sequence = TumSequence::Open(copy);
+  const fs::path broken = copy / sequence.entries()[5].rgb_file;
+  fs::resize_file(broken, 100);  // a truncated PNG
+
+  for (const char* segmenter : {"", "fcis-like"}) {
+    SlamRunOptions options;
+    options.mode = *segmenter != 0 ? slam::SlamMode::kMutual : slam::SlamMode::kPlain;
+    options.segmenter = segmenter;
+    options.max_frames = 10;
+    int frames_done = 0;
+    options.on_frame = [&](int done, int) { frames_done = done; };
+    try {
+      RunSlamOnSequence(sequence, options);
+      ADD_FAILURE() << "a truncated frame was read (" << segmenter << ")";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(broken.filename().string()), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(frames_done, 5) << "frames 0-4 are processed, frame 5 stops the run (" << segmenter << ")";
+  }
+  fs::remove_all(copy);
+}
+
 }  // namespace
 }  // namespace segslam::harness
