@@ -129,6 +129,7 @@ int RunBenchSlam(const BenchSlamArgs& args) {
   SlamRunOptions options;
   options.mode = slam::ParseSlamMode(args.mode);
   options.max_frames = args.frames;
+  options.read_ahead = false;
   ProgressBar bar("bench slam " + args.mode);
   const auto start = std::chrono::steady_clock::now();
   options.on_frame = [&](int done, int total) {

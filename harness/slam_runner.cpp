@@ -25,12 +25,14 @@ fs::path StemOf(const TumSequence& sequence, size_t i) {
   return fs::path(sequence.entries()[i].rgb_file).stem();
 }
 
-// Frames 0, 1, ..., count - 1 of a sequence in order, each read and decoded on another
-// thread while the one before it is processed: decoding a frame's PNGs is about a sixth
-// of a run's time. A read error is thrown by the Next() that would return the frame.
-class FramePrefetcher {
+// Frames 0, 1, ..., count - 1 of a sequence in order. With `read_ahead`, each is read
+// and decoded on another thread while the one before it is processed: decoding a frame's
+// PNGs is about a sixth of a run's time. A read error is thrown by the Next() that would
+// return the frame.
+class FrameReader {
  public:
-  FramePrefetcher(const TumSequence& sequence, int count) : sequence_(sequence), count_(count) {
+  FrameReader(const TumSequence& sequence, int count, bool read_ahead)
+      : sequence_(sequence), count_(count), read_ahead_(read_ahead) {
     if (count_ > 0) next_ = Load(0);
   }
 
@@ -42,11 +44,14 @@ class FramePrefetcher {
 
  private:
   std::future<RgbdFrame> Load(int i) const {
-    return std::async(std::launch::async, [this, i] { return sequence_.LoadFrame(static_cast<size_t>(i)); });
+    // Deferred: read by get(), on the calling thread.
+    const std::launch policy = read_ahead_ ? std::launch::async : std::launch::deferred;
+    return std::async(policy, [this, i] { return sequence_.LoadFrame(static_cast<size_t>(i)); });
   }
 
   const TumSequence& sequence_;
   int count_ = 0;
+  bool read_ahead_ = true;
   int index_ = 0;
   std::future<RgbdFrame> next_;
 };
@@ -159,7 +164,7 @@ SlamRunResult RunMutualLoop(const TumSequence& sequence, const SlamRunOptions& o
   SlamRunResult result;
   const int total = options.max_frames > 0 ? std::min<int>(options.max_frames, static_cast<int>(sequence.size()))
                                            : static_cast<int>(sequence.size());
-  FramePrefetcher frames(sequence, total);
+  FrameReader frames(sequence, total, options.read_ahead);
   for (int i = 0; i < total; ++i) {
     RgbdFrame frame = frames.Next();
     frame.index = i;
@@ -228,7 +233,7 @@ SlamRunResult RunSlamOnSequence(const TumSequence& sequence, const SlamRunOption
   SlamRunResult result;
   const int total = options.max_frames > 0 ? std::min<int>(options.max_frames, static_cast<int>(sequence.size()))
                                            : static_cast<int>(sequence.size());
-  FramePrefetcher frames(sequence, total);
+  FrameReader frames(sequence, total, options.read_ahead);
   for (int i = 0; i < total; ++i) {
     const RgbdFrame frame = frames.Next();
     slam::FrameInstances instances;

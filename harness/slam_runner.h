@@ -51,6 +51,9 @@ struct SlamRunOptions {
   std::filesystem::path map_in;  // a long-term map to localize on (the second pass)
   slam::TrackerOptions tracker;
   int max_frames = 0;            // 0 = all
+  // Read and decode the next frame on another thread while one is processed. Off where
+  // stage timings on one core are measured (bench slam), so decoding cannot preempt them.
+  bool read_ahead = true;
   // Called after each frame with (done, total); may throw to cancel.
   std::function<void(int, int)> on_frame;
 };

@@ -196,19 +196,23 @@ TEST(SlamRunTest, UnreadableFrameStopsTheRunNamingTheFile) {
   fs::resize_file(broken, 100);  // a truncated PNG
 
   for (const char* segmenter : {"", "fcis-like"}) {
-    SlamRunOptions options;
-    options.mode = *segmenter != 0 ? slam::SlamMode::kMutual : slam::SlamMode::kPlain;
-    options.segmenter = segmenter;
-    options.max_frames = 10;
-    int frames_done = 0;
-    options.on_frame = [&](int done, int) { frames_done = done; };
-    try {
-      RunSlamOnSequence(sequence, options);
-      ADD_FAILURE() << "a truncated frame was read (" << segmenter << ")";
-    } catch (const Error& e) {
-      EXPECT_NE(std::string(e.what()).find(broken.filename().string()), std::string::npos) << e.what();
+    for (const bool read_ahead : {true, false}) {
+      SlamRunOptions options;
+      options.mode = *segmenter != 0 ? slam::SlamMode::kMutual : slam::SlamMode::kPlain;
+      options.segmenter = segmenter;
+      options.max_frames = 10;
+      options.read_ahead = read_ahead;
+      const std::string which = std::string(segmenter) + (read_ahead ? " reading ahead" : " reading in turn");
+      int frames_done = 0;
+      options.on_frame = [&](int done, int) { frames_done = done; };
+      try {
+        RunSlamOnSequence(sequence, options);
+        ADD_FAILURE() << "a truncated frame was read (" << which << ")";
+      } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find(broken.filename().string()), std::string::npos) << e.what();
+      }
+      EXPECT_EQ(frames_done, 5) << "frames 0-4 are processed, frame 5 stops the run (" << which << ")";
     }
-    EXPECT_EQ(frames_done, 5) << "frames 0-4 are processed, frame 5 stops the run (" << segmenter << ")";
   }
   fs::remove_all(copy);
 }
