@@ -7,8 +7,8 @@
 # reports/city_two_pass/ (report.html, report.md, results.json).
 #
 # Three repeats per mode, as many runs at a time as there are cores (a run uses about
-# one core and 200 MB), take 7 minutes on two cores once the build is made (6.9 min
-# measured: 76 s to generate, the seven runs in 5 min); the paper's ten repeats:
+# one core and 200 MB), take 6.5 minutes on two cores once the build is made (6 min 30 s
+# measured: 74 s to generate, the seven runs in under 5 min); the paper's ten repeats:
 # ./build/segslam scenario run scenarios/city_two_pass.yaml --jobs "$(nproc)"
 set -euo pipefail
 cd "$(dirname "$0")/.."
