@@ -201,7 +201,7 @@ void JitterBoundary(Rng* rng, double amplitude_px, double scale_px, cv::Mat* mas
   const cv::Mat noise = SmoothNoise(rng, mask->size(), scale_px);
   // Only pixels closer to the boundary than the largest displacement can change side,
   // so the distances are needed in the object's box grown by that much, not in the whole
-  // mask (the distance transforms were a sixth of a mutual run's time). Within that box
+  // mask (the jitter took a sixth of a mutual run's time, by perf). Within that box
   // they are exact: every object pixel is inside it.
   double noise_min = 0, noise_max = 0;
   cv::minMaxLoc(noise, &noise_min, &noise_max);
