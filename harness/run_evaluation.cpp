@@ -34,6 +34,7 @@ struct LoggedInstance {
   int id = 0;
   bool judged = false;
   bool moving = false;
+  int features = 0;  // the frame's features inside the instance's mask
 };
 
 struct LoggedFrame {
@@ -41,6 +42,7 @@ struct LoggedFrame {
   double stamp_s = 0;
   std::string rgb_file;  // the dataset's file of this frame (rgb.txt), set by MatchToSequence
   bool localized = false;
+  int features = 0;  // extracted in the frame
   std::vector<LoggedInstance> instances;
 };
 
@@ -62,9 +64,10 @@ std::vector<LoggedFrame> ReadFrameLog(const fs::path& path) {
       frame.stamp_s = json.at("stamp").get<double>();
       const std::string status = json.at("status").get<std::string>();
       frame.localized = status != "lost";
+      frame.features = json.value("features", 0);
       for (const nlohmann::json& instance : json.at("instances")) {
         frame.instances.push_back({instance.at("id").get<int>(), instance.at("judged").get<bool>(),
-                                   instance.at("moving").get<bool>()});
+                                   instance.at("moving").get<bool>(), instance.value("features", 0)});
       }
       frames.push_back(std::move(frame));
     } catch (const nlohmann::json::exception& e) {
@@ -163,7 +166,11 @@ void ScoreMovingDetection(const std::vector<LoggedFrame>& frames, const fs::path
     for (const TrackSample& sample : track.samples) truly_moving[{track.instance_id, sample.frame}] = sample.moving;
   }
   MovingDetectionScores scores;
+  // Only a mutual run lists every instance it saw; the other modes list none.
+  const bool lists_instances = pass->mode == "mutual";
+  std::vector<double> moving_feature_shares;
   for (const LoggedFrame& frame : frames) {
+    if (lists_instances && frame.features > 0 && frame.instances.empty()) moving_feature_shares.push_back(0.0);
     if (frame.instances.empty()) continue;
     std::map<int, int> gt_id_of;
     if (by_overlap) {
@@ -176,6 +183,7 @@ void ScoreMovingDetection(const std::vector<LoggedFrame>& frames, const fs::path
       gt_id_of = DominantGroundTruthIds(run_ids, gt_ids);
     }
     std::map<int, bool> seen_moving;  // truly moving ground-truth id -> judged moving here
+    int moving_features = 0;
     for (const LoggedInstance& instance : frame.instances) {
       int gt_id = instance.id;
       if (by_overlap) {
@@ -184,7 +192,10 @@ void ScoreMovingDetection(const std::vector<LoggedFrame>& frames, const fs::path
       }
       const auto found = truly_moving.find({gt_id, frame.index});
       const bool moving = found != truly_moving.end() && found->second;
-      if (moving) seen_moving[gt_id] = seen_moving[gt_id] || (instance.judged && instance.moving);
+      if (moving) {
+        seen_moving[gt_id] = seen_moving[gt_id] || (instance.judged && instance.moving);
+        moving_features += instance.features;
+      }
       if (!instance.judged) continue;
       if (instance.moving) {
         ++(moving ? scores.true_positives : scores.false_positives);
@@ -195,7 +206,11 @@ void ScoreMovingDetection(const std::vector<LoggedFrame>& frames, const fs::path
     scores.moving_seen += static_cast<int>(seen_moving.size());
     scores.moving_seen_detected +=
         static_cast<int>(std::count_if(seen_moving.begin(), seen_moving.end(), [](const auto& e) { return e.second; }));
+    if (lists_instances && frame.features > 0) {
+      moving_feature_shares.push_back(std::min(1.0, double(moving_features) / frame.features));
+    }
   }
+  if (!moving_feature_shares.empty()) scores.moving_feature_share = ComputeErrorStatistics(moving_feature_shares);
   pass->moving = scores;
 }
 
@@ -349,7 +364,8 @@ nlohmann::json PassEvaluation::ToJson() const {
                                 {"recall", NumberJson(moving->Recall())},
                                 {"moving_seen", moving->moving_seen},
                                 {"moving_seen_detected", moving->moving_seen_detected},
-                                {"coverage", NumberJson(moving->Coverage())}};
+                                {"coverage", NumberJson(moving->Coverage())},
+                                {"moving_feature_share", StatisticsJson(moving->moving_feature_share)}};
   }
   for (const auto& [metric, value] : PassMetrics(*this)) json["metrics"][metric] = NumberJson(value);
   return json;
@@ -399,15 +415,20 @@ std::string RunEvaluation::Table() const {
   const bool any_moving = std::any_of(passes.begin(), passes.end(), [](const auto& p) { return p.moving.has_value(); });
   if (any_moving) {
     text += fmt::format("\nMoving-object detection over judged instances vs tracks.json; coverage: the share of moving "
-                        "instances seen (a feature on them, judged or not) that were judged moving\n{:<8} {:>7} {:>9} "
-                        "{:>7} {:>5} {:>5} {:>5} {:>5} {:>8}\n",
-                        "sequence", "judged", "precision", "recall", "tp", "fp", "fn", "tn", "coverage");
+                        "instances seen (a feature on them, judged or not) that were judged moving; moving features: "
+                        "the share of a frame's features on truly moving instances, mean and max over frames\n"
+                        "{:<8} {:>7} {:>9} {:>7} {:>5} {:>5} {:>5} {:>5} {:>8} {:>15}\n",
+                        "sequence", "judged", "precision", "recall", "tp", "fp", "fn", "tn", "coverage",
+                        "moving features");
     for (const PassEvaluation& p : passes) {
       if (!p.moving.has_value()) continue;
       const MovingDetectionScores& m = *p.moving;
-      text += fmt::format("{:<8} {:>7} {:>9} {:>7} {:>5} {:>5} {:>5} {:>5} {:>8}\n", p.name, m.Judged(),
+      const std::string share = m.moving_feature_share.has_value()
+                                    ? Percent(m.moving_feature_share->mean) + " / " + Percent(m.moving_feature_share->max)
+                                    : "n/a";
+      text += fmt::format("{:<8} {:>7} {:>9} {:>7} {:>5} {:>5} {:>5} {:>5} {:>8} {:>15}\n", p.name, m.Judged(),
                           Percent(m.Precision()), Percent(m.Recall()), m.true_positives, m.false_positives,
-                          m.false_negatives, m.true_negatives, Percent(m.Coverage()));
+                          m.false_negatives, m.true_negatives, Percent(m.Coverage()), share);
     }
   }
   return text;
@@ -442,7 +463,8 @@ const std::vector<std::string>& PassMetricNames() {
       "ate_rmse_m",       "ate_mean_m",      "ate_median_m",     "ate_std_m",        "ate_min_m",
       "ate_max_m",        "rpe_trans_rmse_m", "rpe_rot_rmse_deg", "localized_share",  "seg_raw_map",
       "seg_raw_ap50",     "seg_raw_miou",    "seg_refined_map",  "seg_refined_ap50", "seg_refined_miou",
-      "moving_precision", "moving_recall",   "moving_coverage"};
+      "moving_precision", "moving_recall",   "moving_coverage",  "moving_feature_share_mean",
+      "moving_feature_share_max"};
   return names;
 }
 
@@ -474,6 +496,10 @@ std::map<std::string, double> PassMetrics(const PassEvaluation& pass) {
     metrics["moving_precision"] = pass.moving->Precision();
     metrics["moving_recall"] = pass.moving->Recall();
     metrics["moving_coverage"] = pass.moving->Coverage();
+    if (pass.moving->moving_feature_share.has_value()) {
+      metrics["moving_feature_share_mean"] = pass.moving->moving_feature_share->mean;
+      metrics["moving_feature_share_max"] = pass.moving->moving_feature_share->max;
+    }
   }
   return metrics;
 }

@@ -57,6 +57,11 @@ struct MovingDetectionScores {
   int moving_seen = 0;           // (frame, truly moving instance) pairs with a feature on it
   int moving_seen_detected = 0;  // of those, judged moving
   double Coverage() const;       // moving_seen_detected / moving_seen; NaN when none was seen
+  // How much of what SLAM saw moved: per frame, the share of the frame's features that lie
+  // on truly moving instances (of the masks SLAM used, related to the ground truth as
+  // above; exact with the dataset's masks), over every frame with features. Only mutual
+  // runs list the instances of a frame, so other modes leave it absent.
+  std::optional<ErrorStatistics> moving_feature_share;
 };
 
 // mAP, AP50 and mIoU of a set of masks (NaN where seg.json holds null).
@@ -120,6 +125,7 @@ RunEvaluation EvaluateRun(const std::filesystem::path& run_dir, const std::files
 //   localized_share
 //   seg_raw_map seg_raw_ap50 seg_raw_miou seg_refined_map seg_refined_ap50 seg_refined_miou
 //   moving_precision moving_recall moving_coverage
+//   moving_feature_share_mean moving_feature_share_max   (MovingDetectionScores)
 // A metric the pass lacks (no ATE, no seg.json ...) is NaN.
 std::map<std::string, double> PassMetrics(const PassEvaluation& pass);
 // The names PassMetrics returns, in the order above.

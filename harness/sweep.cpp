@@ -364,7 +364,11 @@ std::string MergeSweep(const std::vector<fs::path>& inputs, const fs::path& out_
     table.header.push_back("mutual/plain ATE p1");
     if (two_pass) table.header.push_back("mutual/plain ATE p2");
   }
-  if (has_mutual) table.header.push_back("mutual mIoU raw -> refined");
+  if (has_mutual) {
+    // What the density axes mean to SLAM: how much of what it saw moved (run_evaluation.h).
+    table.header.push_back("moving features p1, mean");
+    table.header.push_back("mutual mIoU raw -> refined");
+  }
   nlohmann::json merged = {{"grid", grid.ToJson()}, {"points", nlohmann::json::array()}};
   for (int p = 0; p < points; ++p) {
     const nlohmann::json& r = results[p];
@@ -385,6 +389,7 @@ std::string MergeSweep(const std::vector<fs::path>& inputs, const fs::path& out_
       }
     }
     if (has_mutual) {
+      row.push_back(Cell(100 * ValueOf(r, "pass1", "mutual", "moving_feature_share_mean").median, "{:.1f}%"));
       row.push_back(Cell(100 * ValueOf(r, "pass1", "mutual", "seg_raw_miou").median, "{:.1f}") + " -> " +
                     Cell(100 * ValueOf(r, "pass1", "mutual", "seg_refined_miou").median, "{:.1f}"));
     }

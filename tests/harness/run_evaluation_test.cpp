@@ -150,6 +150,71 @@ TEST_F(RunEvaluationTest, MovingDetectionCountsJudgedInstancesAgainstTracks) {
   EXPECT_TRUE(std::isnan(MovingDetectionScores{}.Coverage()));
 }
 
+// The share of a frame's features on truly moving instances, per frame: instances count
+// whether judged or not, static ones and those without a track do not, a frame without
+// instances counts as 0 and one without features is left out.
+TEST_F(RunEvaluationTest, MovingFeatureShareCountsFeaturesOnTrulyMovingInstances) {
+  const fs::path sequence = dir_ / "sequence";
+  WriteSequence(sequence, GroundTruth(0));
+  std::vector<ObjectTrack> tracks;
+  for (const auto& [id, moving_in_frame_3] : std::vector<std::pair<int, bool>>{{3, true}, {4, false}, {5, false}}) {
+    ObjectTrack track;
+    track.instance_id = static_cast<std::uint16_t>(id);
+    for (int frame : {0, 3}) {
+      TrackSample sample;
+      sample.frame = frame;
+      sample.stamp_s = 100 + frame * kFrameIntervalS;
+      sample.moving = frame == 0 ? id != 4 : moving_in_frame_3;  // 5 stops after frame 0
+      track.samples.push_back(sample);
+    }
+    tracks.push_back(track);
+  }
+  WriteTracks(sequence / "tracks.json", tracks);
+  const std::vector<StampedPose> ground_truth = GroundTruth(0);
+  const std::vector<StampedPose> estimate(ground_truth.begin(), ground_truth.begin() + 4);
+  auto write_run = [&](const std::string& mode) {
+    fs::create_directories(dir_ / mode);
+    WriteTumTrajectory(dir_ / mode / "trajectory.txt", estimate,
+                       "segslam run, mode " + mode + ", sequence test\ninstance masks: gt");
+    std::ofstream frames(dir_ / mode / "frames.jsonl");
+    const std::string instances[4] = {
+        // 3 and 5 move (30 + 20 of 200 features), 4 stands still, 7 has no track.
+        "{\"id\": 3, \"judged\": true, \"moving\": true, \"features\": 30},"
+        "{\"id\": 4, \"judged\": true, \"moving\": false, \"features\": 50},"
+        "{\"id\": 5, \"judged\": false, \"moving\": false, \"features\": 20},"
+        "{\"id\": 7, \"judged\": false, \"moving\": false, \"features\": 40}",
+        "",  // no instance in view: 0
+        "",  // no features at all (a blank wall): left out
+        // 3 moves (60 of 100), 5 stands still now.
+        "{\"id\": 3, \"judged\": false, \"moving\": false, \"features\": 60},"
+        "{\"id\": 5, \"judged\": true, \"moving\": false, \"features\": 30}"};
+    const int features[4] = {200, 100, 0, 100};
+    for (int i = 0; i < 4; ++i) {
+      frames << "{\"frame\": " << i << ", \"stamp\": " << std::fixed << estimate[i].stamp_s
+             << ", \"status\": \"tracking\", \"features\": " << features[i] << ", \"instances\": ["
+             << (mode == "mutual" ? instances[i] : "") << "]}\n";
+    }
+  };
+  write_run("mutual");
+  write_run("mask-moveable");
+
+  const RunEvaluation mutual = EvaluateRun(dir_ / "mutual", sequence);
+  ASSERT_TRUE(mutual.passes[0].moving.has_value());
+  const std::optional<ErrorStatistics>& share = mutual.passes[0].moving->moving_feature_share;
+  ASSERT_TRUE(share.has_value());
+  EXPECT_EQ(share->count, 3u);
+  EXPECT_DOUBLE_EQ(share->max, 0.6);
+  EXPECT_DOUBLE_EQ(share->median, 0.25);
+  EXPECT_NEAR(share->mean, (0.25 + 0.0 + 0.6) / 3, 1e-12);
+  EXPECT_NEAR(PassMetrics(mutual.passes[0]).at("moving_feature_share_mean"), (0.25 + 0.6) / 3, 1e-12);
+
+  // Other modes list no instances: the share is unknown there, not 0.
+  const RunEvaluation mask_moveable = EvaluateRun(dir_ / "mask-moveable", sequence);
+  ASSERT_TRUE(mask_moveable.passes[0].moving.has_value());
+  EXPECT_FALSE(mask_moveable.passes[0].moving->moving_feature_share.has_value());
+  EXPECT_TRUE(std::isnan(PassMetrics(mask_moveable.passes[0]).at("moving_feature_share_max")));
+}
+
 // A segmenter's ids carry no ground-truth identity: each judged instance stands for the
 // ground-truth instance its refined mask covers most.
 TEST_F(RunEvaluationTest, SegmenterInstancesAreRelatedToGroundTruthByTheirMasks) {
