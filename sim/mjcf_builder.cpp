@@ -240,7 +240,11 @@ MjcfModel BuildMjcf(const scenes::World& world, const MjcfOptions& options) {
   std::ostringstream xml;
   xml << fmt::format("<mujoco model=\"{}\">\n", world.name.empty() ? "segslam" : world.name);
   xml << "  <compiler angle=\"radian\"/>\n";
-  xml << "  <option timestep=\"0.01\"/>\n";
+  // Nothing is simulated: every part is a mocap body posed per frame. Without contacts,
+  // the compiler's forward pass skips collision detection, whose broad phase takes stack
+  // in proportion to the number of bodies: a crowded city (90 pedestrians, two passes of
+  // traffic) overflowed MuJoCo's default stack at load time.
+  xml << "  <option timestep=\"0.01\">\n    <flag contact=\"disable\"/>\n  </option>\n";
   // extent 1: the near/far planes are znear/zfar in metres exactly.
   xml << "  <statistic extent=\"1\" center=\"0 0 0\"/>\n";
   xml << "  <visual>\n";

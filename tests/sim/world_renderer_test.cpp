@@ -190,6 +190,27 @@ TEST_P(WorldRendererTest, ShadowsRender) {
   EXPECT_NEAR(f.depth_m.at<float>(60, 80), kWallX, 0.002);
 }
 
+// A crowded city holds thousands of mocap bodies (every part of every person and car of
+// both passes); MuJoCo must load such a world, and render its objects.
+TEST_P(WorldRendererTest, WorldWithThousandsOfObjectsLoads) {
+  scenes::World world = MakeTestWorld();
+  constexpr int kExtraObjects = 4000;
+  for (int k = 0; k < kExtraObjects; ++k) {
+    scenes::Object extra = world.objects[0];
+    extra.instance_id = static_cast<std::uint16_t>(1000 + k);
+    world.objects.push_back(extra);
+  }
+  WorldRenderer renderer(world, GetParam());
+  EXPECT_EQ(renderer.geom_count(), 3 + kExtraObjects);
+  // The last object stands where the box stood; every other one is hidden.
+  std::vector<std::vector<Eigen::Isometry3d>> poses(world.objects.size());
+  poses.back() = {testing::Translation(kBoxCentre)};
+  renderer.SetPartPoses(poses);
+  const RenderedFrame f = renderer.RenderFrom(CameraPose());
+  EXPECT_GT(cv::countNonZero(f.instance_ids == 1000 + kExtraObjects - 1), 100);
+  EXPECT_EQ(cv::countNonZero(f.instance_ids == kBoxInstance), 0);
+}
+
 TEST_P(WorldRendererTest, SetPartPosesChecksSizes) {
   WorldRenderer renderer(MakeTestWorld(), GetParam());
   EXPECT_THROW(renderer.SetPartPoses({}), Error);
