@@ -9,6 +9,7 @@
 #include "scenes/textures.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <functional>
 #include <set>
@@ -801,18 +802,24 @@ class CityBuilder {
 
   struct Track {
     std::vector<Vec2> pos;
-    std::vector<double> yaw;
+    std::vector<Vec2> heading;  // (cos, sin) of the yaw
     std::vector<char> present;  // per sample: in the world at that time
     double half_length = 0.3, half_width = 0.3;
     bool car = false;
+    // Radius of the footprint inflated by each clearance margin (Clearance).
+    double radius_with_car_margin = 0, radius_with_person_margin = 0;
   };
+  static constexpr double kCarMarginM = 0.3;     // cars keep 0.6 m between bodies
+  static constexpr double kPersonMarginM = 0.1;  // people 0.2 m from anyone
 
   void MakeSamples() {
     samples_.clear();
     for (Pass pass : kBothPasses) {
+      sample_stamps_[PassIndex(pass)].clear();
       for (int f = 0; f < world_.frames_per_pass[PassIndex(pass)]; ++f) {
         const double t = FrameStamp(world_, f);
         samples_.push_back({pass, t, CameraPoseAt(world_, pass, t).translation().head<2>()});
+        sample_stamps_[PassIndex(pass)].push_back(t);
       }
     }
   }
@@ -822,18 +829,24 @@ class CityBuilder {
     tr.half_length = half_length;
     tr.half_width = half_width;
     tr.car = car;
-    for (const Sample& s : samples_) {
-      const Eigen::Isometry3d T = ObjectPoseAt(o, s.pass, s.t);
-      tr.pos.push_back(T.translation().head<2>());
-      tr.yaw.push_back(std::atan2(T.linear()(1, 0), T.linear()(0, 0)));
-      tr.present.push_back(o.placement[PassIndex(s.pass)].present);
+    tr.radius_with_car_margin = std::hypot(half_length + kCarMarginM, half_width + kCarMarginM);
+    tr.radius_with_person_margin = std::hypot(half_length + kPersonMarginM, half_width + kPersonMarginM);
+    for (Pass pass : kBothPasses) {  // the order of samples_
+      const bool present = o.placement[PassIndex(pass)].present;
+      for (const Eigen::Isometry3d& T : ObjectPosesAt(o, pass, sample_stamps_[PassIndex(pass)])) {
+        tr.pos.push_back(T.translation().head<2>());
+        const double yaw = std::atan2(T.linear()(1, 0), T.linear()(0, 0));
+        tr.heading.push_back(Vec2(std::cos(yaw), std::sin(yaw)));
+        tr.present.push_back(present);
+      }
     }
     return tr;
   }
 
   // Separating-axis ratio of two footprints inflated by `margin`: >= 1 means clear.
   static double SatRatio(const Track& a, const Track& b, std::size_t i, double margin) {
-    const Vec2 ua(std::cos(a.yaw[i]), std::sin(a.yaw[i])), ub(std::cos(b.yaw[i]), std::sin(b.yaw[i]));
+    const Vec2& ua = a.heading[i];
+    const Vec2& ub = b.heading[i];
     const Vec2 axes[4] = {ua, Vec2(-ua.y(), ua.x()), ub, Vec2(-ub.y(), ub.x())};
     const Vec2 d = b.pos[i] - a.pos[i];
     double best = 0;
@@ -854,8 +867,15 @@ class CityBuilder {
       score = std::min(score, (tr.pos[i] - samples_[i].camera).norm() / min_camera_m);
       for (const Track& other : tracks_) {
         if (!other.present[i]) continue;
-        // Cars keep 0.6 m between bodies, people 0.2 m from anyone.
-        const double margin = tr.car && other.car ? 0.3 : 0.1;
+        const bool cars = tr.car && other.car;
+        const double margin = cars ? kCarMarginM : kPersonMarginM;
+        // The ratio is at least |d| / (sqrt(2) (r_a + r_b)), with r the radius of an
+        // inflated footprint: one of a's two axes carries |d| / sqrt(2) of the distance d,
+        // and no extent along an axis exceeds r. Pairs that far apart cannot lower the
+        // score (with a margin for rounding), so they are skipped.
+        const double radii = cars ? tr.radius_with_car_margin + other.radius_with_car_margin
+                                  : tr.radius_with_person_margin + other.radius_with_person_margin;
+        if ((other.pos[i] - tr.pos[i]).squaredNorm() * (1.0 - 1e-9) > 2.0 * radii * radii * score * score) continue;
         score = std::min(score, SatRatio(tr, other, i, margin));
       }
       if (score <= floor) break;
@@ -1273,6 +1293,7 @@ class CityBuilder {
   std::vector<double> lane_s_;
   std::vector<Slot> slots_;
   std::vector<Sample> samples_;  // frames of both passes
+  std::array<std::vector<double>, 2> sample_stamps_;  // samples_' stamps, per pass
   std::vector<Track> tracks_;    // placed moving actors
   std::vector<RedLight> red_lights_;
   std::vector<Halt> camera_halts_;  // the red lights, by camera arc length

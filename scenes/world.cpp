@@ -72,9 +72,9 @@ Eigen::Isometry3d PoseOf(const Eigen::Vector3d& position, double yaw) {
   return T;
 }
 
-// Pose on the path at arc length s (distance travelled since the path's start).
-Eigen::Isometry3d PathPose(const PathMotion& path, double s) {
-  const Polyline line(path.waypoints, path.closed);
+// Pose on the path at arc length s (distance travelled since the path's start); `line`
+// is Polyline(path.waypoints, path.closed).
+Eigen::Isometry3d PathPose(const PathMotion& path, const Polyline& line, double s) {
   if (line.points.size() < 2 || line.length <= 1e-9) return PoseOf(path.waypoints.front(), 0.0);
   const double d = TurnHalfWindow(path, line);
 
@@ -168,7 +168,18 @@ Eigen::Isometry3d ObjectPoseAt(const Object& object, Pass pass, double stamp_s) 
   const Placement& p = object.placement[PassIndex(pass)];
   if (!p.present) return Eigen::Isometry3d::Identity();
   if (!p.moving || p.path.waypoints.empty()) return p.T_world_object;
-  return PathPose(p.path, PathDistanceAt(p.path, stamp_s));
+  return PathPose(p.path, Polyline(p.path.waypoints, p.path.closed), PathDistanceAt(p.path, stamp_s));
+}
+
+std::vector<Eigen::Isometry3d> ObjectPosesAt(const Object& object, Pass pass, const std::vector<double>& stamps_s) {
+  const Placement& p = object.placement[PassIndex(pass)];
+  if (!p.present) return std::vector<Eigen::Isometry3d>(stamps_s.size(), Eigen::Isometry3d::Identity());
+  if (!p.moving || p.path.waypoints.empty()) return std::vector<Eigen::Isometry3d>(stamps_s.size(), p.T_world_object);
+  const Polyline line(p.path.waypoints, p.path.closed);
+  std::vector<Eigen::Isometry3d> poses;
+  poses.reserve(stamps_s.size());
+  for (double t : stamps_s) poses.push_back(PathPose(p.path, line, PathDistanceAt(p.path, t)));
+  return poses;
 }
 
 std::vector<Eigen::Isometry3d> PartPosesAt(const Object& object, Pass pass, double stamp_s) {

@@ -188,6 +188,9 @@ std::vector<Eigen::Isometry3d> PartPosesAt(const Object& object, Pass pass, doub
 
 // Pose of the object's root frame (not of its parts) at time `stamp_s` of `pass`.
 Eigen::Isometry3d ObjectPoseAt(const Object& object, Pass pass, double stamp_s);
+// ObjectPoseAt at each of `stamps_s`, the same poses bit for bit; the path's arc-length
+// table is built once rather than once per stamp.
+std::vector<Eigen::Isometry3d> ObjectPosesAt(const Object& object, Pass pass, const std::vector<double>& stamps_s);
 
 // Whether the object's root moves between stamp_s and stamp_s + dt_s (rigid motion or
 // gait), i.e. whether it is a moving object in that frame.

@@ -116,6 +116,27 @@ TEST(WorldTest, ClosedLoopTurnsSmoothlyAndWraps) {
   EXPECT_NEAR(ObjectPoseAt(car, Pass::kFirst, 5.0 + 80.0 / 5).linear().col(0).y(), 1.0, 1e-6);  // going +y after the corner
 }
 
+TEST(WorldTest, ObjectPosesAtGivesObjectPoseAtBitForBit) {
+  Object car;
+  car.parts.resize(1);
+  Placement& path = car.placement[0];
+  path.moving = true;
+  path.path.waypoints = {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(20, 0, 0), Eigen::Vector3d(20, 20, 0)};
+  path.path.speed_mps = 6.0;
+  path.path.halts = {{15.0, 2.0}};
+  Placement& parked = car.placement[1];
+  parked.T_world_object.translation() = Eigen::Vector3d(3, 4, 0);
+  std::vector<double> stamps;
+  for (int f = 0; f < 150; ++f) stamps.push_back(f / 15.0);  // out, standing, round the corner, back
+  for (Pass pass : {Pass::kFirst, Pass::kSecond}) {
+    const std::vector<Eigen::Isometry3d> poses = ObjectPosesAt(car, pass, stamps);
+    ASSERT_EQ(poses.size(), stamps.size());
+    for (std::size_t i = 0; i < stamps.size(); ++i) {
+      EXPECT_EQ(poses[i].matrix(), ObjectPoseAt(car, pass, stamps[i]).matrix()) << "pass " << PassIndex(pass) << " t " << stamps[i];
+    }
+  }
+}
+
 TEST(WorldTest, OpenPathPingPongs) {
   Object o = StraightWalker(1.0);
   o.placement[0].path.start_offset_m = 0.0;
