@@ -447,11 +447,14 @@ YAML::Node ScenarioToYaml(const Scenario& scenario) {
   return root;
 }
 
-void ApplyOverride(Scenario& scenario, const std::string& dotted_key, const std::string& value) {
-  const std::string origin =
-      scenario.source_file.empty() ? std::string("<override>") : scenario.source_file.string();
+namespace {
 
-  // The YAML to edit: the file's own text, or the effective configuration.
+std::string OverrideOrigin(const Scenario& scenario) {
+  return scenario.source_file.empty() ? std::string("<override>") : scenario.source_file.string();
+}
+
+// The YAML that overrides edit: the file's own text, or the effective configuration.
+YAML::Node EditableYaml(const Scenario& scenario, const std::string& origin) {
   YAML::Node root;
   if (!scenario.text.empty()) {
     try {
@@ -461,16 +464,18 @@ void ApplyOverride(Scenario& scenario, const std::string& dotted_key, const std:
     }
   }
   if (!root.IsMap()) root = ScenarioToYaml(scenario);
+  return root;
+}
 
-  // The value as YAML, so that lists and numbers keep their types.
+// Sets `dotted_key` in `root` to `value` read as YAML (so lists and numbers keep their
+// types), creating mappings on the way.
+void SetKey(YAML::Node root, const std::string& origin, const std::string& dotted_key, const std::string& value) {
   YAML::Node parsed;
   try {
     parsed = YAML::Load(value);
   } catch (const YAML::ParserException& e) {
     throw KeyError(origin, dotted_key, "cannot read override value '" + value + "': " + e.msg);
   }
-
-  // Walk (creating mappings) down to the parent of the last key, then set it.
   std::vector<std::string> parts;
   std::stringstream ss(dotted_key);
   for (std::string part; std::getline(ss, part, '.');) parts.push_back(part);
@@ -486,7 +491,10 @@ void ApplyOverride(Scenario& scenario, const std::string& dotted_key, const std:
     node.reset(child);
   }
   node[parts.back()] = parsed;
+}
 
+// Validates the edited YAML as a file would be, and makes it the scenario.
+void ReplaceWithEdited(Scenario& scenario, const YAML::Node& root, const std::string& origin) {
   YAML::Emitter out;
   out << root;
   Scenario edited = ParseScenario(std::string(out.c_str()) + "\n", origin);
@@ -494,14 +502,28 @@ void ApplyOverride(Scenario& scenario, const std::string& dotted_key, const std:
   scenario = std::move(edited);
 }
 
+}  // namespace
+
+void ApplyOverride(Scenario& scenario, const std::string& dotted_key, const std::string& value) {
+  const std::string origin = OverrideOrigin(scenario);
+  YAML::Node root = EditableYaml(scenario, origin);
+  SetKey(root, origin, dotted_key, value);
+  ReplaceWithEdited(scenario, root, origin);
+}
+
 void ApplyOverrides(Scenario& scenario, const std::vector<std::string>& assignments) {
+  const std::string origin = OverrideOrigin(scenario);
+  YAML::Node root = EditableYaml(scenario, origin);
   for (const std::string& assignment : assignments) {
     const std::size_t equals = assignment.find('=');
     if (equals == std::string::npos || equals == 0) {
       throw Error("'" + assignment + "': expected KEY=VALUE, e.g. city.moving_cars=8");
     }
-    ApplyOverride(scenario, assignment.substr(0, equals), assignment.substr(equals + 1));
+    SetKey(root, origin, assignment.substr(0, equals), assignment.substr(equals + 1));
   }
+  // Validated once all are set: keys checked together (pass2.relocated_share and
+  // pass2.removed_share) may come in any order.
+  if (!assignments.empty()) ReplaceWithEdited(scenario, root, origin);
 }
 
 }  // namespace segslam::scenes

@@ -122,9 +122,12 @@ Scenario ParseScenario(const std::string& yaml_text, const std::string& origin);
 // result re-parsed with the same validation, so a bad key or value throws the same
 // errors as a file would. On success `scenario.text` holds the edited YAML.
 void ApplyOverride(Scenario& scenario, const std::string& dotted_key, const std::string& value);
-// ApplyOverride for each "KEY=VALUE" in turn, e.g. "city.moving_cars=8" (what `--set`
-// and the `set:` lists of suite and sweep files hold). Throws on text without a key and
-// an '=' with an error that quotes it; callers add where it came from.
+// Sets each "KEY=VALUE" as ApplyOverride does, e.g. "city.moving_cars=8" (what `--set`
+// and the `set:` lists of suite and sweep files hold), a later one winning over an
+// earlier one of the same key, and validates once all are set, so keys checked
+// together (pass2.relocated_share + pass2.removed_share <= 1) may be set in any order.
+// Throws on text without a key and an '=' with an error that quotes it; callers add
+// where it came from.
 void ApplyOverrides(Scenario& scenario, const std::vector<std::string>& assignments);
 
 // The full effective configuration (every key, defaults included, plus `expect` and

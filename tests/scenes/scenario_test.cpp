@@ -181,7 +181,33 @@ TEST(ScenarioTest, ApplyOverridesSplitsKeyAndValueAtTheFirstEquals) {
     } catch (const Error& e) {
       EXPECT_NE(std::string(e.what()).find("'" + bad + "': expected KEY=VALUE"), std::string::npos) << e.what();
     }
+    EXPECT_EQ(s.seed, 5u) << "a failed list leaves the scenario as it was";
   }
+}
+
+// relocated_share + removed_share <= 1 is checked on the result, not after each key:
+// from the file's 0.3 + 0.1, raising one share first and lowering the other second is
+// as valid as the other order.
+TEST(ScenarioTest, ApplyOverridesValidatesOnceAllAreSet) {
+  for (const std::vector<std::string>& order :
+       {std::vector<std::string>{"pass2.relocated_share=0.95", "pass2.removed_share=0"},
+        std::vector<std::string>{"pass2.removed_share=0", "pass2.relocated_share=0.95"}}) {
+    Scenario s = LoadScenario(ScenarioPath("city_two_pass.yaml"));
+    ApplyOverrides(s, order);
+    EXPECT_DOUBLE_EQ(s.pass2.relocated_share, 0.95);
+    EXPECT_DOUBLE_EQ(s.pass2.removed_share, 0.0);
+  }
+  Scenario s = LoadScenario(ScenarioPath("city_two_pass.yaml"));
+  try {
+    ApplyOverrides(s, {"pass2.relocated_share=0.95", "pass2.removed_share=0.2"});
+    FAIL() << "1.15 accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("relocated_share + removed_share must be <= 1"), std::string::npos)
+        << e.what();
+  }
+  // A key set twice: the later value wins.
+  ApplyOverrides(s, {"city.moving_cars=3", "city.moving_cars=9"});
+  EXPECT_EQ(s.city.moving_cars, 9);
 }
 
 TEST(ScenarioTest, ToYamlRoundTrips) {
