@@ -403,6 +403,11 @@ Scenario ParseScenario(const std::string& yaml_text, const std::string& origin) 
   if (s.camera.far_m <= s.camera.near_m) {
     throw KeyError(origin, "camera.far_m", "must be > camera.near_m (got " + Num(s.camera.far_m) + ")");
   }
+  if (s.sensor.max_depth_m > 0 && s.sensor.min_depth_m >= s.sensor.max_depth_m) {
+    throw KeyError(origin, "sensor.max_depth_m",
+                   "must be > sensor.min_depth_m (got " + Num(s.sensor.max_depth_m) + " <= " +
+                       Num(s.sensor.min_depth_m) + "): no pixel would have depth");
+  }
   if (s.pass2.relocated_share + s.pass2.removed_share > 1.0 + 1e-9) {
     throw KeyError(origin, "pass2.removed_share",
                    "relocated_share + removed_share must be <= 1 (got " +

@@ -92,6 +92,9 @@ TEST(ScenarioTest, OutOfRangeNamesKeyAndValue) {
             "my.yaml: office.camera_motion: must be one of xyz, static, rpy, halfsphere (got 'spin')");
   EXPECT_NE(ParseError("seed: -1\n").find("seed: must be >= 0"), std::string::npos);
   EXPECT_NE(ParseError("camera: {near_m: 1, far_m: 0.5}\n").find("camera.far_m"), std::string::npos);
+  EXPECT_EQ(ParseError("sensor: {min_depth_m: 10, max_depth_m: 1}\n"),
+            "my.yaml: sensor.max_depth_m: must be > sensor.min_depth_m (got 1 <= 10): no pixel would have depth");
+  EXPECT_EQ(ParseScenario("sensor: {min_depth_m: 10, max_depth_m: 0}\n", "ok.yaml").sensor.min_depth_m, 10);
 }
 
 TEST(ScenarioTest, WrongTypesAreRefused) {
