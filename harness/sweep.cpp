@@ -408,6 +408,8 @@ std::string MergeSweep(const std::vector<fs::path>& inputs, const fs::path& out_
                      "share of frames", {}});
   }
   if (has_mutual) {
+    plots.push_back({"sweep_moving_features_pass1.png", "pass1", "moving_feature_share_mean",
+                     "Moving features (mutual), pass 1", "mean share of features on movers", {"mutual"}});
     plots.push_back({"sweep_miou_pass1.png", "pass1", "seg_refined_miou", "Segmentation in the loop (mutual), pass 1",
                      "mIoU", {"mutual"}});
   }

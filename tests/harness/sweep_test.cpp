@@ -187,13 +187,23 @@ TEST_F(SweepCliTest, ShardsMergedEqualOneRun) {
   const CommandOutput whole = Run("sweep " + common + " --out " + (dir_ / "whole").string());
   ASSERT_EQ(whole.exit_code, 0) << whole.stderr_text;
   for (const char* file : {"sweep.json", "sweep_results.json", "report.md", "report.html", "figures/sweep_ate_pass1.png",
-                           "figures/sweep_localized_pass2.png", "points/office.people_walking=0/results.json",
+                           "figures/sweep_localized_pass2.png", "figures/sweep_moving_features_pass1.png",
+                           "points/office.people_walking=0/results.json",
                            "points/office.people_walking=2/results.json"}) {
     EXPECT_TRUE(fs::exists(dir_ / "whole" / file)) << file;
   }
   const std::string table = ReadText(dir_ / "whole" / "report.md");
   EXPECT_NE(table.find("| office.people\\_walking |"), std::string::npos) << table;  // Markdown escapes '_'
   EXPECT_NE(table.find("![ATE, pass 1 against"), std::string::npos) << table;
+  // Moving features: the sitter gestures, so tracks.json counts it moving at both points
+  // (16 % of the features); the two walkers add to that.
+  const nlohmann::json results = nlohmann::json::parse(ReadText(dir_ / "whole" / "sweep_results.json"));
+  ASSERT_EQ(results["points"].size(), 2u);
+  const auto moving_mean = [&](int point) {
+    return results["points"][point]["summary"]["pass1"]["mutual"]["moving_feature_share_mean"]["median"].get<double>();
+  };
+  EXPECT_LT(moving_mean(0), moving_mean(1));
+  EXPECT_GT(moving_mean(1), 0.05);
 
   for (const char* shard : {"1/2", "2/2"}) {
     const CommandOutput part = Run("sweep " + common + " --shard " + shard + " --out " +
