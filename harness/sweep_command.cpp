@@ -166,7 +166,7 @@ void AddSweepCommand(CLI::App& app, std::function<int()>* action) {
   CLI::App* sweep = app.add_subcommand(
       "sweep",
       "A scenario run per point of a parameter grid (a sweep file's axes, or --set key=v1,v2,...), then a "
-      "table and plots of ATE, relocalization and mIoU against the parameter, per mode");
+      "table and plots of ATE, relocalization, moving features and mIoU against the parameter, per mode");
   sweep->add_option("file", args->file,
                     "A scenario YAML file (the grid from --set), or a sweep file with its scenario and axes "
                     "(scenarios/sweeps/)");
