@@ -169,9 +169,16 @@ void ScoreMovingDetection(const std::vector<LoggedFrame>& frames, const fs::path
   // Only a mutual run lists every instance it saw; the other modes list none.
   const bool lists_instances = pass->mode == "mutual";
   std::vector<double> moving_feature_shares;
+  const auto add_share = [&](const LoggedFrame& frame, int moving_features) {
+    if (lists_instances && frame.features > 0) {
+      moving_feature_shares.push_back(std::min(1.0, double(moving_features) / frame.features));
+    }
+  };
   for (const LoggedFrame& frame : frames) {
-    if (lists_instances && frame.features > 0 && frame.instances.empty()) moving_feature_shares.push_back(0.0);
-    if (frame.instances.empty()) continue;
+    if (frame.instances.empty()) {
+      add_share(frame, 0);
+      continue;
+    }
     std::map<int, int> gt_id_of;
     if (by_overlap) {
       const std::string stem = fs::path(frame.rgb_file).stem().string();
@@ -206,9 +213,7 @@ void ScoreMovingDetection(const std::vector<LoggedFrame>& frames, const fs::path
     scores.moving_seen += static_cast<int>(seen_moving.size());
     scores.moving_seen_detected +=
         static_cast<int>(std::count_if(seen_moving.begin(), seen_moving.end(), [](const auto& e) { return e.second; }));
-    if (lists_instances && frame.features > 0) {
-      moving_feature_shares.push_back(std::min(1.0, double(moving_features) / frame.features));
-    }
+    add_share(frame, moving_features);
   }
   if (!moving_feature_shares.empty()) scores.moving_feature_share = ComputeErrorStatistics(moving_feature_shares);
   pass->moving = scores;
