@@ -288,7 +288,9 @@ class CityBuilder {
     for (int i = 0; i < n; ++i) {
       RedLight r = candidates[(2 * i + 1) * candidates.size() / (2 * n)];  // spread over the route
       if (i % 2 == 0) {
-        r.lead_kind = VehicleKind(rng, /*allow_bus=*/true);
+        r.lead_kind = VehicleKind(rng, /*allow_bus=*/true);  // drawn either way: the same
+                                                              // draws for the other lights
+        if (spec_.red_light_lead != "random") r.lead_kind = spec_.red_light_lead;
         double half_length, half_width;
         VehicleSize(r.lead_kind, &half_length, &half_width);
         r.camera_stop_s -= 2 * half_length + kQueueGapM;

@@ -139,6 +139,8 @@ class FieldTable {
     Add("city.crossing_share", Double(&y.crossing_share, Closed(0, 1), "city.crossing_share"));
     Add("city.red_lights", Int(&y.red_lights, 0, 50, "city.red_lights"));
     Add("city.red_light_s", Double(&y.red_light_s, Closed(1, 120), "city.red_light_s"));
+    Add("city.red_light_lead",
+        Choice(&y.red_light_lead, {"random", "car", "truck", "bus"}, "city.red_light_lead"));
     Add("city.pass2_new_traffic", Bool(&y.pass2_new_traffic, "city.pass2_new_traffic"));
 
     OfficeSpec& o = s->office;

@@ -65,6 +65,11 @@ struct CitySpec {
   // the light turns green; at the others it is first in line.
   int red_lights = 0;
   double red_light_s = 12.0;  // standing time at each light
+  // The vehicle the camera car waits behind at those lights: random (a car, truck or
+  // bus, as traffic comes), car, truck or bus. A bus standing 2 m ahead fills most of
+  // the image and then pulls away, the classic case where visual odometry takes the
+  // motion of the view for its own.
+  std::string red_light_lead = "random";
   // true: pass 2 has traffic of its own (other moving cars, lead vehicles and
   // pedestrians, on other paths at other times), as a revisit on another day and the
   // paper's second passes ("different ... moveable objects"); false: the same movers do

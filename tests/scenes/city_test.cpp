@@ -285,6 +285,42 @@ TEST(CityTest, CameraWaitsAtRedLightsWhileTrafficAndPeopleCrossInFront) {
   }
 }
 
+// city.red_light_lead picks the vehicle the camera waits behind; the rest of the world is
+// drawn as with "random", so a study of the lead changes only the lead.
+TEST(CityTest, RedLightLeadIsTheVehicleKindAsked) {
+  Scenario s = SmallCityScenario();
+  ApplyOverride(s, "city.route_length_m", "130");
+  ApplyOverride(s, "city.red_lights", "1");
+  ApplyOverride(s, "city.red_light_s", "4");
+  const World random_lead = BuildWorld(s);
+  for (const std::string kind : {"car", "truck", "bus"}) {
+    Scenario k = s;
+    ApplyOverride(k, "city.red_light_lead", kind);
+    const World w = BuildWorld(k);
+    const auto stretches = StandingStretches(w, Pass::kFirst);
+    ASSERT_EQ(stretches.size(), 1u) << kind;
+    const int mid = (stretches[0].first + stretches[0].second) / 2;
+    const double t_mid = FrameStamp(w, mid);
+    const Eigen::Isometry3d T_cw = CameraPoseAt(w, Pass::kFirst, t_mid).inverse();
+    std::vector<std::string> ahead;  // vehicles standing in the camera's lane, just ahead
+    for (const Object& o : w.objects) {
+      const Placement& p = o.placement[PassIndex(Pass::kFirst)];
+      if (!p.present || !p.moving || o.articulation == Articulation::kWalker) continue;
+      const Eigen::Vector3d c = T_cw * ObjectPoseAt(o, Pass::kFirst, t_mid).translation();
+      if (c.z() > 3.0 && c.z() < 12.0 && std::abs(c.x()) < 1.0) ahead.push_back(o.category_name);
+    }
+    EXPECT_EQ(ahead, std::vector<std::string>{kind});
+    // Every object other than the leads (one per pass: pass 2 has traffic of its own)
+    // is of the same kind as with a random lead.
+    ASSERT_EQ(w.objects.size(), random_lead.objects.size()) << kind;
+    int differing = 0;
+    for (std::size_t i = 0; i < w.objects.size(); ++i) {
+      differing += w.objects[i].category_name != random_lead.objects[i].category_name;
+    }
+    EXPECT_LE(differing, 2) << kind;
+  }
+}
+
 // Moving actors are scripted against the camera route: cars ahead, oncoming and crossing,
 // pedestrians on the route's sidewalks and crosswalks. Checked geometrically (object roots
 // in the horizontal field of view, within 40 m in front), and for clearance at frame rate.

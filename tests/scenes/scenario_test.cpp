@@ -88,6 +88,8 @@ TEST(ScenarioTest, OutOfRangeNamesKeyAndValue) {
   EXPECT_EQ(ParseError("city: {red_lights: -1}\n"), "my.yaml: city.red_lights: must be in [0, 50] (got -1)");
   EXPECT_EQ(ParseError("city: {red_light_s: 0.5}\n"), "my.yaml: city.red_light_s: must be in [1, 120] (got 0.5)");
   EXPECT_EQ(ParseError("kind: forest\n"), "my.yaml: kind: must be one of city, office (got 'forest')");
+  EXPECT_EQ(ParseError("city: {red_light_lead: tram}\n"),
+            "my.yaml: city.red_light_lead: must be one of random, car, truck, bus (got 'tram')");
   EXPECT_EQ(ParseError("office: {camera_motion: spin}\n"),
             "my.yaml: office.camera_motion: must be one of xyz, static, rpy, halfsphere (got 'spin')");
   EXPECT_NE(ParseError("seed: -1\n").find("seed: must be >= 0"), std::string::npos);
