@@ -133,6 +133,17 @@ double Median(std::vector<double> values) {
   return values[values.size() / 2];
 }
 
+// A map reset voids the poses of the frames before it: they are in the frame of a map
+// that no longer exists, so they count as lost, as ORB-SLAM2 forgets them.
+void AddFrame(const slam::FrameResult& frame, SlamRunResult* result) {
+  if (frame.map_reset) {
+    for (slam::FrameResult& earlier : result->frames) earlier.status = slam::TrackingStatus::kLost;
+    result->trajectory.clear();
+  }
+  if (frame.localized()) result->trajectory.push_back({frame.stamp_s, frame.T_wc});
+  result->frames.push_back(frame);
+}
+
 // Mutual mode with a segmenter: the paper's loop, refined masks written and scored.
 SlamRunResult RunMutualLoop(const TumSequence& sequence, const SlamRunOptions& options) {
   const std::unique_ptr<seg::Segmenter> segmenter = MakeSegmenter(sequence, options);
@@ -169,8 +180,7 @@ SlamRunResult RunMutualLoop(const TumSequence& sequence, const SlamRunOptions& o
     RgbdFrame frame = frames.Next();
     frame.index = i;
     const mutual::MutualFrameResult step = loop.ProcessFrame(frame);
-    if (step.slam.localized()) result.trajectory.push_back({frame.stamp_s, step.slam.T_wc});
-    result.frames.push_back(step.slam);
+    AddFrame(step.slam, &result);
     refine_ms.push_back(step.refine_ms);
     loop_scores.refined_from_previous += step.refined_from_previous;
     for (const seg::RegionDecision& decision : step.decisions) {
@@ -239,8 +249,7 @@ SlamRunResult RunSlamOnSequence(const TumSequence& sequence, const SlamRunOption
     slam::FrameInstances instances;
     if (masks != nullptr) instances = masks->Load(frame);
     const slam::FrameResult frame_result = tracker.Track(frame, masks ? &instances : nullptr, options.mode);
-    if (frame_result.localized()) result.trajectory.push_back({frame.stamp_s, frame_result.T_wc});
-    result.frames.push_back(frame_result);
+    AddFrame(frame_result, &result);
     if (options.on_frame) options.on_frame(i + 1, total);
   }
   // The plain baseline knows no instances, so its long-term map is everything it mapped;
@@ -261,6 +270,7 @@ void WriteFrameLog(const fs::path& path, const std::vector<slam::FrameResult>& f
     line["stamp"] = frame.stamp_s;
     line["status"] = slam::ToString(frame.status);
     line["keyframe"] = frame.keyframe;
+    line["map_reset"] = frame.map_reset;
     line["features"] = frame.num_features;
     line["features_with_depth"] = frame.num_features_with_depth;
     line["coarse_inliers"] = frame.num_coarse_inliers;

@@ -239,6 +239,8 @@ struct Tracker::Impl {
   bool initialized = false;
   bool pending_first_keyframe = false;
   bool last_status_lost = false;
+  double lost_since_s = -1;  // stamp of the first frame of the current run of lost frames
+  bool reset_map = false;    // drop the map once this frame is done
   bool localization_mode = false;
   std::deque<InstanceSnapshot> history;
   std::map<std::uint16_t, InstanceMotionMemory> motion_memory;  // per instance id
@@ -1016,8 +1018,9 @@ std::optional<Eigen::Isometry3d> Tracker::EstimateCoarsePose() {
   bool tracked = false;
   bool relocalized = false;
   if (!s.initialized && !s.localization_mode) {
-    // The first frame defines the map; it needs enough features with depth.
-    if (s.result.num_features_with_depth >= 100) {
+    // The first frame defines the map; it needs enough features with depth (checked
+    // again in UpdateMaps() on those that may enter the map).
+    if (s.result.num_features_with_depth >= options_.min_initial_map_features) {
       s.current.T_cw = options_.initial_T_wc.inverse();
       s.initialized = true;
       s.pending_first_keyframe = true;
@@ -1048,6 +1051,14 @@ std::optional<Eigen::Isometry3d> Tracker::EstimateCoarsePose() {
       s.last_relocalization_frame = s.current.index;
       if (s.close_depth_m <= 0) s.close_depth_m = options_.close_depth_m > 0 ? options_.close_depth_m : 10.0;
     }
+  }
+  if (tracked) {
+    s.lost_since_s = -1;
+  } else if (s.initialized && !s.localization_mode) {
+    if (s.lost_since_s < 0) s.lost_since_s = s.current.stamp_s;
+    const int keyframes = static_cast<int>(map_->keyframes().size());
+    s.reset_map = keyframes <= options_.reset_map_keyframes &&
+                  s.current.stamp_s - s.lost_since_s >= options_.reset_map_after_lost_s - 1e-9;
   }
   s.coarse_ok = tracked;
   s.result.status = !tracked ? TrackingStatus::kLost
@@ -1241,6 +1252,19 @@ std::optional<Eigen::Isometry3d> Tracker::EstimateFinePose() {
 FrameResult Tracker::UpdateMaps() {
   Impl& s = *impl_;
   const Clock::time_point start = Clock::now();
+  if (s.fine_ok && s.pending_first_keyframe) {
+    int mappable = 0;
+    for (size_t i = 0; i < s.current.features.size(); ++i) {
+      mappable += s.current.features.depth_m[i] > 0 && !s.current.excluded[i];
+    }
+    if (mappable < options_.min_initial_map_features) {
+      // Mostly unjudged moveable objects: no map on this frame, wait for a better view.
+      s.pending_first_keyframe = false;
+      s.initialized = false;
+      s.fine_ok = false;
+      s.result.status = TrackingStatus::kLost;
+    }
+  }
   if (s.fine_ok) {
     for (size_t i = 0; i < s.current.points.size(); ++i) {
       MapPoint* point = s.current.points[i];
@@ -1269,7 +1293,16 @@ FrameResult Tracker::UpdateMaps() {
   s.have_last = true;
   s.current = WorkingFrame();
   s.result.timings.map_update_ms = MsSince(start) - s.result.timings.bundle_adjustment_ms;
-  return s.result;
+  if (!s.reset_map) return s.result;
+  FrameResult result = std::move(s.result);
+  result.map_reset = true;
+  // A fresh map and tracker state; what is known of the instances' motion is not tied
+  // to the map and stays.
+  std::map<std::uint16_t, InstanceMotionMemory> motion_memory = std::move(s.motion_memory);
+  map_ = std::make_unique<Map>();
+  impl_ = std::make_unique<Impl>(camera_, options_, map_.get());
+  impl_->motion_memory = std::move(motion_memory);
+  return result;
 }
 
 FrameResult Tracker::Track(const RgbdFrame& frame, const FrameInstances* instances, SlamMode mode) {

@@ -115,6 +115,10 @@ struct FrameResult {
   int num_coarse_inliers = 0;
   int num_fine_inliers = 0;
   bool keyframe = false;
+  // The map was dropped at this (lost) frame, to begin anew (TrackerOptions::
+  // reset_map_keyframes): the poses of the frames before it are in a frame that no longer
+  // exists, and a caller keeping them should count those frames lost.
+  bool map_reset = false;
   std::vector<InstanceJudgement> instances;
   FrameTimings timings;
   bool localized() const { return status != TrackingStatus::kLost; }
@@ -193,6 +197,17 @@ struct TrackerOptions {
   int static_frames_to_trust_young_points = 10;
   // Long-term map export: points seen in at least this many keyframes.
   int long_term_min_observations = 2;
+  // The first keyframe needs this many features with depth that may enter the map (in
+  // mutual mode not those on moveable instances that are not judged yet).
+  int min_initial_map_features = 100;
+  // A young map (at most reset_map_keyframes keyframes) that stays lost for
+  // reset_map_after_lost_s is dropped, and the next frame with enough features begins a
+  // new one: it was begun on a view the scene soon hid (people walking close in front of
+  // the camera at the start) and cannot relocalize where it never saw anything. ORB-SLAM2
+  // drops a map lost with at most 5 keyframes at once; waiting first lets a short
+  // occlusion relocalize. 0 keyframes = never. Never in localization mode.
+  int reset_map_keyframes = 5;
+  double reset_map_after_lost_s = 1.0;
   // Pose of the first frame when no map is loaded (the map's frame).
   Eigen::Isometry3d initial_T_wc = Eigen::Isometry3d::Identity();
   // Fill FrameResult::feature_records (costs a few kB per frame; off for plain runs).

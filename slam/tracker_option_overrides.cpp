@@ -63,6 +63,9 @@ const std::map<std::string, Setter>& Setters() {
       SEGSLAM_INT(min_points_to_clear_moving),
       SEGSLAM_INT(static_frames_to_trust_young_points),
       SEGSLAM_INT(long_term_min_observations),
+      SEGSLAM_INT(min_initial_map_features),
+      SEGSLAM_INT(reset_map_keyframes),
+      SEGSLAM_REAL(reset_map_after_lost_s),
   };
   return setters;
 }

@@ -10,7 +10,12 @@
 #include <cstdio>
 #include <algorithm>
 #include <filesystem>
+#include <fstream>
 #include <map>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "core/error.h"
 #include "core/instances.h"
@@ -181,6 +186,59 @@ TEST(SlamRunTest, MapFromAnotherCameraIsRefused) {
     EXPECT_NE(std::string(e.what()).find(map_file.string()), std::string::npos) << e.what();
   }
   fs::remove(map_file);
+}
+
+// A first map begun on frames of another place (two city frames spliced before a static
+// office) never relocalizes in the office: the tracker drops the young map after a
+// second lost and begins a new one (slam::TrackerOptions::reset_map_keyframes). The
+// frames tracked in the dropped map count as lost, in the result and in frames.jsonl,
+// and the trajectory holds only poses of the new map, which track the office.
+TEST(SlamRunTest, FramesTrackedInADroppedMapCountAsLost) {
+  const fs::path office = kDataDir / "office_static" / "pass1";
+  const fs::path city = kDataDir / "city_static" / "pass1";
+  RequireDataset(office);
+  RequireDataset(city);
+  const fs::path copy = fs::path(::testing::TempDir()) / "slam_run_test_spliced";
+  fs::remove_all(copy);
+  fs::copy(office, copy, fs::copy_options::recursive);
+  const TumSequence spliced_layout = TumSequence::Open(copy);
+  const TumSequence city_sequence = TumSequence::Open(city);
+  for (size_t i = 0; i < 2; ++i) {
+    for (const auto file : {&TumFrameEntry::rgb_file, &TumFrameEntry::depth_file}) {
+      fs::copy_file(city / (city_sequence.entries()[i].*file), copy / (spliced_layout.entries()[i].*file),
+                    fs::copy_options::overwrite_existing);
+    }
+  }
+  const TumSequence spliced = TumSequence::Open(copy);
+  const SlamRunResult run = RunSlamOnSequence(spliced, SlamRunOptions{});
+  std::vector<int> resets;
+  for (const slam::FrameResult& frame : run.frames) {
+    if (frame.map_reset) resets.push_back(frame.frame_index);
+  }
+  ASSERT_EQ(resets.size(), 1u);
+  const int reset = resets.front();
+  EXPECT_NEAR(reset, 32, 1) << "lost from frame 2, dropped 1 s (30 frames) later";
+  for (int i = 0; i <= reset; ++i) EXPECT_FALSE(run.frames[static_cast<size_t>(i)].localized()) << "frame " << i;
+  for (size_t i = static_cast<size_t>(reset) + 1; i < run.frames.size(); ++i) {
+    EXPECT_TRUE(run.frames[i].localized()) << "frame " << i;
+  }
+  ASSERT_EQ(run.trajectory.size(), run.frames.size() - static_cast<size_t>(reset) - 1);
+  EXPECT_EQ(run.trajectory.front().stamp_s, run.frames[static_cast<size_t>(reset) + 1].stamp_s);
+  const AteResult ate = ComputeAte(spliced.groundtruth(), run.trajectory, AteOptions{});
+  EXPECT_LT(ate.translation_m.rmse, 0.01);
+
+  const fs::path log = copy / "frames.jsonl";
+  WriteFrameLog(log, run.frames);
+  std::ifstream in(log);
+  std::string line;
+  for (int i = 0; std::getline(in, line); ++i) {
+    const nlohmann::json parsed = nlohmann::json::parse(line);
+    EXPECT_EQ(parsed.at("map_reset").get<bool>(), i == reset) << "line " << i;
+    if (i < 2) {
+      EXPECT_EQ(parsed.at("status").get<std::string>(), "lost") << "line " << i;
+    }
+  }
+  fs::remove_all(copy);
 }
 
 // Frames are read ahead on another thread; a frame that cannot be read still stops the

@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <optional>
+#include <vector>
 
 #include "core/error.h"
 #include "tests/slam/synthetic_room.h"
@@ -139,6 +141,96 @@ TEST(TrackerTest, RelocalizesAfterLosingTrack) {
   const FrameResult next = tracker.Track(RenderQuads(room, camera, PathPose(11), 24, 24 / 30.0).frame, nullptr,
                                          SlamMode::kPlain);
   EXPECT_EQ(next.status, TrackingStatus::kTracking);
+}
+
+// A crate 0.7 m in front of the camera's start, filling the whole view.
+std::vector<testing::TexturedQuad> CrateInFront(std::uint16_t instance_id) {
+  return BoxQuads({-1.3, -1.5, 0.0}, {-1.1, 1.5, 3.0}, 61, instance_id, 768);
+}
+
+// The map is begun on a crate that fills the view and is taken away two frames later:
+// nothing the map holds is seen again, so it cannot relocalize. Being young (few
+// keyframes), it is dropped after reset_map_after_lost_s lost, and the next frame begins
+// a new map in which the camera is tracked; without the reset it would stay lost.
+TEST(TrackerTest, YoungMapLostForGoodIsDroppedAndBegunAnew) {
+  const PinholeCamera camera = TestCamera();
+  const auto room = RoomQuads(6);
+  auto with_crate = room;
+  const auto crate = CrateInFront(0);
+  with_crate.insert(with_crate.end(), crate.begin(), crate.end());
+  TrackerOptions never = StartingAt(PathPose(0));
+  never.reset_map_keyframes = 0;
+  Tracker tracker(camera, StartingAt(PathPose(0)));
+  Tracker never_resets(camera, never);
+  ASSERT_EQ(tracker.options().reset_map_after_lost_s, 1.0);
+  constexpr int kCrateFrames = 3, kFrames = 45;
+  std::vector<int> resets;
+  std::optional<Eigen::Isometry3d> new_first_T_wc;
+  int new_first = -1;
+  double worst_m = 0;
+  for (int i = 0; i < kFrames; ++i) {
+    const auto rendered = RenderQuads(i < kCrateFrames ? with_crate : room, camera, PathPose(i), i, i / 30.0);
+    const FrameResult result = tracker.Track(rendered.frame, nullptr, SlamMode::kPlain);
+    const FrameResult kept = never_resets.Track(rendered.frame, nullptr, SlamMode::kPlain);
+    EXPECT_FALSE(kept.map_reset);
+    if (i < kCrateFrames) {
+      EXPECT_TRUE(result.localized()) << "frame " << i;
+      continue;
+    }
+    EXPECT_EQ(kept.status, TrackingStatus::kLost) << "frame " << i;
+    if (result.map_reset) {
+      resets.push_back(i);
+      EXPECT_EQ(result.status, TrackingStatus::kLost);
+    }
+    if (!result.localized()) continue;
+    // The new map's frame is that of its first frame, given initial_T_wc: compare
+    // motion relative to it.
+    if (!new_first_T_wc) {
+      new_first_T_wc = result.T_wc;
+      new_first = i;
+    }
+    const Eigen::Isometry3d estimated = new_first_T_wc->inverse() * result.T_wc;
+    const Eigen::Isometry3d truth = PathPose(new_first).inverse() * PathPose(i);
+    worst_m = std::max(worst_m, PositionError(estimated, truth));
+  }
+  // Lost from frame 3 (0.1 s): dropped on the first frame 1 s later, begun again on the next.
+  EXPECT_EQ(resets, std::vector<int>{33});
+  EXPECT_EQ(new_first, 34);
+  EXPECT_LT(worst_m, 0.01);
+  for (const auto& point : tracker.map().points()) {
+    EXPECT_GT(point->position_w.x(), -1.0) << "a point of the crate outlived the reset";
+  }
+}
+
+// Mutual mode keeps moveable objects out of the map until they are judged, so a first
+// frame filled by one would begin an empty map: no map is begun there, and the first
+// frame with enough other features begins it. Plain maps the crate at once.
+TEST(TrackerTest, MutualBeginsNoMapOnAViewOfUnjudgedMoveableObjects) {
+  const PinholeCamera camera = TestCamera();
+  const auto room = RoomQuads(6);
+  auto with_crate = room;
+  const auto crate = CrateInFront(1);
+  with_crate.insert(with_crate.end(), crate.begin(), crate.end());
+  FrameInstances instances;
+  instances.moveable_ids = {1};
+  Tracker mutual(camera, StartingAt(PathPose(0)));
+  Tracker plain(camera, StartingAt(PathPose(0)));
+  for (int i = 0; i < 5; ++i) {
+    const auto rendered = RenderQuads(i < 2 ? with_crate : room, camera, PathPose(i), i, i / 30.0);
+    instances.ids = rendered.instance_ids;
+    const FrameResult result = mutual.Track(rendered.frame, &instances, SlamMode::kMutual);
+    if (i < 2) {
+      // Enough features to begin a map, all on the crate.
+      EXPECT_GE(result.num_features_with_depth, 2 * mutual.options().min_initial_map_features) << "frame " << i;
+      EXPECT_EQ(result.status, TrackingStatus::kLost) << "frame " << i;
+      EXPECT_TRUE(mutual.map().points().empty()) << "frame " << i;
+      EXPECT_EQ(plain.Track(rendered.frame, nullptr, SlamMode::kPlain).status, TrackingStatus::kTracking);
+    } else {
+      EXPECT_EQ(result.status, TrackingStatus::kTracking) << "frame " << i;
+      EXPECT_FALSE(result.map_reset);
+    }
+  }
+  EXPECT_GE(mutual.map().keyframes().size(), 1u);
 }
 
 TEST(TrackerTest, LocalizesOnALoadedLongTermMapWithoutChangingIt) {
