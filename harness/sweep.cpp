@@ -5,6 +5,7 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <numeric>
 #include <optional>
 #include <set>
 #include <sstream>
@@ -74,30 +75,6 @@ std::string Join(const std::vector<std::string>& parts, const std::string& separ
   return out;
 }
 
-// The x coordinate of each value of an axis: the number where every value is one, else
-// the position (the plot's ticks then count points).
-std::vector<double> AxisCoordinates(const SweepAxis& axis, bool* numeric) {
-  std::vector<double> x;
-  *numeric = true;
-  for (const std::string& value : axis.values) {
-    try {
-      std::size_t used = 0;
-      x.push_back(std::stod(value, &used));
-      if (used != value.size()) *numeric = false;
-    } catch (const std::exception&) {
-      *numeric = false;
-    }
-  }
-  if (*numeric && std::is_sorted(x.begin(), x.end()) &&
-      std::adjacent_find(x.begin(), x.end()) == x.end()) {
-    return x;
-  }
-  *numeric = false;
-  x.clear();
-  for (std::size_t i = 0; i < axis.values.size(); ++i) x.push_back(static_cast<double>(i));
-  return x;
-}
-
 struct PlotSpec {
   std::string file;     // under figures/
   std::string pass;
@@ -108,6 +85,33 @@ struct PlotSpec {
 };
 
 }  // namespace
+
+AxisPlacement PlaceAxisOnPlot(const SweepAxis& axis) {
+  AxisPlacement placement;
+  std::vector<double> numbers;
+  for (const std::string& value : axis.values) {
+    try {
+      std::size_t used = 0;
+      numbers.push_back(std::stod(value, &used));
+      if (used != value.size()) placement.numeric = false;
+    } catch (const std::exception&) {
+      placement.numeric = false;
+    }
+  }
+  placement.value_index.resize(axis.values.size());
+  std::iota(placement.value_index.begin(), placement.value_index.end(), std::size_t{0});
+  if (placement.numeric) {
+    std::sort(placement.value_index.begin(), placement.value_index.end(),
+              [&](std::size_t a, std::size_t b) { return numbers[a] < numbers[b]; });
+    for (std::size_t v : placement.value_index) placement.x.push_back(numbers[v]);
+    if (std::adjacent_find(placement.x.begin(), placement.x.end()) == placement.x.end()) return placement;
+  }
+  placement.numeric = false;
+  placement.x.clear();
+  std::iota(placement.value_index.begin(), placement.value_index.end(), std::size_t{0});
+  for (std::size_t i = 0; i < axis.values.size(); ++i) placement.x.push_back(static_cast<double>(i));
+  return placement;
+}
 
 SweepGrid SweepGrid::FromSetOptions(const std::vector<std::string>& set_options) {
   SweepGrid grid;
@@ -454,8 +458,7 @@ std::string MergeSweep(const std::vector<fs::path>& inputs, const fs::path& out_
 
   if (!grid.axes.empty()) {
     document.AddHeading("Against " + grid.axes.front().key, 2);
-    bool numeric = true;
-    const std::vector<double> x = AxisCoordinates(grid.axes.front(), &numeric);
+    const AxisPlacement placement = PlaceAxisOnPlot(grid.axes.front());
     const int per_value = points / static_cast<int>(grid.axes.front().values.size());
     fs::create_directories(out_dir / "figures");
     for (const PlotSpec& spec : plots) {
@@ -469,7 +472,7 @@ std::string MergeSweep(const std::vector<fs::path>& inputs, const fs::path& out_
             const std::vector<std::string> assignments = grid.PointAssignments(rest);
             s.name += " (" + Join({assignments.begin() + 1, assignments.end()}, ", ") + ")";
           }
-          for (std::size_t v = 0; v < x.size(); ++v) {
+          for (const std::size_t v : placement.value_index) {
             const PointValue value = ValueOf(results[static_cast<int>(v) * per_value + rest], spec.pass, mode, spec.metric);
             s.y.push_back(value.median);
             s.y_min.push_back(value.min);
@@ -480,9 +483,9 @@ std::string MergeSweep(const std::vector<fs::path>& inputs, const fs::path& out_
       }
       LinePlotOptions options;
       options.title = spec.title;
-      options.x_label = grid.axes.front().key + (numeric ? "" : " (" + Join(grid.axes.front().values, ", ") + ")");
+      options.x_label = grid.axes.front().key + (placement.numeric ? "" : " (" + Join(grid.axes.front().values, ", ") + ")");
       options.y_label = spec.y_label;
-      WriteFigure(out_dir / "figures" / spec.file, DrawLinePlot(options, x, series).image);
+      WriteFigure(out_dir / "figures" / spec.file, DrawLinePlot(options, placement.x, series).image);
       document.AddImage("figures/" + spec.file, spec.title + " against " + grid.axes.front().key +
                                                     " (median over repeats, bars from min to max)");
     }

@@ -26,6 +26,17 @@ struct SweepAxis {
   std::vector<std::string> values;
 };
 
+// Where each value of an axis goes on a plot's x axis, in the order to draw them: the
+// numbers, ascending, where every value is a distinct number (a sweep may list them
+// either way, e.g. distances from far to near); else the values in their order at 0, 1,
+// 2, ... (the plot's ticks then count points).
+struct AxisPlacement {
+  bool numeric = true;
+  std::vector<double> x;                  // strictly increasing
+  std::vector<std::size_t> value_index;   // the axis value drawn at x[k]
+};
+AxisPlacement PlaceAxisOnPlot(const SweepAxis& axis);
+
 // The grid: every --set with more than one value is an axis (the first varies slowest);
 // the others are fixed overrides applied to every point.
 struct SweepGrid {

@@ -46,6 +46,26 @@ TEST(SweepGridTest, ListsBecomeAxesAndSingleValuesFixedOverrides) {
   EXPECT_EQ(again.ToJson(), grid.ToJson());
 }
 
+// Plots put numeric axes at their values, ascending whichever way the sweep lists them,
+// and anything else (words, duplicates) at 0, 1, 2, ... in the listed order.
+TEST(SweepGridTest, AxisValuesArePlacedOnThePlotInAscendingOrder) {
+  const AxisPlacement far_to_near = PlaceAxisOnPlot({"office.walker_front_distance_m", {"1.15", "0.85", "0.5"}});
+  EXPECT_TRUE(far_to_near.numeric);
+  EXPECT_EQ(far_to_near.x, (std::vector<double>{0.5, 0.85, 1.15}));
+  EXPECT_EQ(far_to_near.value_index, (std::vector<std::size_t>{2, 1, 0}));
+  const AxisPlacement ascending = PlaceAxisOnPlot({"city.moving_cars", {"0", "4", "16"}});
+  EXPECT_EQ(ascending.x, (std::vector<double>{0, 4, 16}));
+  EXPECT_EQ(ascending.value_index, (std::vector<std::size_t>{0, 1, 2}));
+  for (const SweepAxis& axis : {SweepAxis{"office.camera_motion", {"xyz", "static", "rpy"}},
+                                SweepAxis{"city.moving_cars", {"4", "0", "4"}},
+                                SweepAxis{"pass2.camera_offset_m", {"[0,0.5,0]", "[0,1,0]", "2m"}}}) {
+    const AxisPlacement placed = PlaceAxisOnPlot(axis);
+    EXPECT_FALSE(placed.numeric) << axis.key;
+    EXPECT_EQ(placed.x, (std::vector<double>{0, 1, 2})) << axis.key;
+    EXPECT_EQ(placed.value_index, (std::vector<std::size_t>{0, 1, 2})) << axis.key;
+  }
+}
+
 TEST(SweepGridTest, MalformedSetIsAnErrorNamingIt) {
   EXPECT_THROW(SweepGrid::FromSetOptions({"city.moving_cars"}), Error);
   EXPECT_THROW(SweepGrid::FromSetOptions({"city.moving_cars="}), Error);
