@@ -9,6 +9,7 @@
 #include <cstdio>
 
 #include <fmt/core.h>
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "core/atomic_file.h"
@@ -53,6 +54,20 @@ void PrintPass(const PassRun& pass) {
                pass.aligned ? "aligned" : "map frame");
   } else {
     fmt::print(" {:>10} {:>10}\n", "n/a", "n/a");
+  }
+}
+
+// A map dropped and begun anew (slam::TrackerOptions::reset_map_keyframes) explains a
+// low localized share, so it is said where it happened.
+void PrintMapResets(const std::vector<PassRun>& passes) {
+  for (const PassRun& pass : passes) {
+    std::vector<std::string> frames;
+    for (const slam::FrameResult& frame : pass.run.frames) {
+      if (frame.map_reset) frames.push_back(std::to_string(frame.frame_index));
+    }
+    if (frames.empty()) continue;
+    fmt::print("{}: a young map stayed lost and was dropped at frame {} to begin anew; the frames before count as lost\n",
+               pass.name, fmt::join(frames, ", "));
   }
 }
 
@@ -131,6 +146,7 @@ int RunRun(const RunArgs& args) {
   fmt::print("\n{:<8} {:>6} {:>10} {:>9} {:>9} {:>10} {:>10} {:>10}\n", "sequence", "frames", "localized",
              "keyframes", "points", "track ms", "ATE rmse m", "ATE max m");
   for (const PassRun& pass : passes) PrintPass(pass);
+  PrintMapResets(passes);
   PrintLoopSegmentation(passes);
   fmt::print("outputs in {}\n", out_dir.string());
   return 0;
