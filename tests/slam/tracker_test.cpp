@@ -143,9 +143,12 @@ TEST(TrackerTest, RelocalizesAfterLosingTrack) {
   EXPECT_EQ(next.status, TrackingStatus::kTracking);
 }
 
-// A crate 0.7 m in front of the camera's start, filling the whole view.
-std::vector<testing::TexturedQuad> CrateInFront(std::uint16_t instance_id) {
-  return BoxQuads({-1.3, -1.5, 0.0}, {-1.1, 1.5, 3.0}, 61, instance_id, 768);
+// `room` with a crate 0.7 m in front of the camera's start, filling the whole view.
+std::vector<testing::TexturedQuad> WithCrateInFront(std::vector<testing::TexturedQuad> room,
+                                                    std::uint16_t crate_instance_id) {
+  const auto crate = BoxQuads({-1.3, -1.5, 0.0}, {-1.1, 1.5, 3.0}, 61, crate_instance_id, 768);
+  room.insert(room.end(), crate.begin(), crate.end());
+  return room;
 }
 
 // The map is begun on a crate that fills the view and is taken away two frames later:
@@ -155,9 +158,7 @@ std::vector<testing::TexturedQuad> CrateInFront(std::uint16_t instance_id) {
 TEST(TrackerTest, YoungMapLostForGoodIsDroppedAndBegunAnew) {
   const PinholeCamera camera = TestCamera();
   const auto room = RoomQuads(6);
-  auto with_crate = room;
-  const auto crate = CrateInFront(0);
-  with_crate.insert(with_crate.end(), crate.begin(), crate.end());
+  const auto with_crate = WithCrateInFront(room, 0);
   TrackerOptions never = StartingAt(PathPose(0));
   never.reset_map_keyframes = 0;
   Tracker tracker(camera, StartingAt(PathPose(0)));
@@ -208,9 +209,7 @@ TEST(TrackerTest, YoungMapLostForGoodIsDroppedAndBegunAnew) {
 TEST(TrackerTest, MutualBeginsNoMapOnAViewOfUnjudgedMoveableObjects) {
   const PinholeCamera camera = TestCamera();
   const auto room = RoomQuads(6);
-  auto with_crate = room;
-  const auto crate = CrateInFront(1);
-  with_crate.insert(with_crate.end(), crate.begin(), crate.end());
+  const auto with_crate = WithCrateInFront(room, 1);
   FrameInstances instances;
   instances.moveable_ids = {1};
   Tracker mutual(camera, StartingAt(PathPose(0)));
