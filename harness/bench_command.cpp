@@ -4,6 +4,7 @@
 // stage, and the local bundle adjustment time per keyframe.
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/tum_dataset.h"
 #include "harness/commands.h"
 #include "harness/progress_bar.h"
 #include "harness/slam_runner.h"
@@ -19,6 +20,7 @@
 #include <chrono>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <thread>
 #include <unistd.h>
 
@@ -103,6 +105,7 @@ struct BenchSlamArgs {
   std::string mode = "mutual";
   int frames = 0;
   std::string json_file;
+  std::string camera_file;
 };
 
 struct TimeSummary {
@@ -125,7 +128,9 @@ TimeSummary Summarize(std::vector<double> values) {
 int RunBenchSlam(const BenchSlamArgs& args) {
   // One core, as ORB-SLAM2's tracking thread: OpenCV's own threads would flatter us.
   cv::setNumThreads(1);
-  const TumSequence sequence = TumSequence::Open(args.sequence);
+  std::optional<SequenceCamera> camera;
+  if (!args.camera_file.empty()) camera = ReadCameraYaml(args.camera_file);
+  const TumSequence sequence = TumSequence::Open(args.sequence, camera);
   SlamRunOptions options;
   options.mode = slam::ParseSlamMode(args.mode);
   options.max_frames = args.frames;
@@ -196,6 +201,8 @@ void AddBenchCommand(CLI::App& app, std::function<int()>* action) {
   slam->add_option("--frames", slam_args->frames, "Only the first N frames (0 = all)")
       ->check(CLI::NonNegativeNumber);
   slam->add_option("--json", slam_args->json_file, "Also write the results as JSON");
+  slam->add_option("--camera", slam_args->camera_file,
+                   "camera.yaml to use instead of the sequence's own (for a real sequence without one)");
   slam->callback([slam_args, action] { *action = [slam_args] { return RunBenchSlam(*slam_args); }; });
 }
 

@@ -1,0 +1,66 @@
+// `segslam bench slam` on a generated sequence (fixture sim_datasets): the per-stage
+// table and its JSON hold a time for every stage and the keyframes' bundle adjustment,
+// and a sequence without camera intrinsics needs --camera. Speed itself is what the
+// command measures, so nothing here asserts how fast.
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <string>
+
+#include "tests/harness/cli_runner.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using segslam::testing::CommandOutput;
+using segslam::testing::ReadText;
+
+const fs::path kDataDir = SEGSLAM_TEST_DATA_DIR;
+
+class BenchCliTest : public segslam::testing::CliScratchTest {
+ protected:
+  BenchCliTest() : CliScratchTest("segslam_bench_") {}
+};
+
+TEST_F(BenchCliTest, SlamTimesEveryStageAndTheBundleAdjustment) {
+  const fs::path sequence = kDataDir / "office_static" / "pass1";
+  ASSERT_TRUE(fs::is_directory(sequence)) << sequence;
+  const fs::path json_file = dir_ / "bench.json";
+  const CommandOutput out =
+      Run("bench slam " + sequence.string() + " --mode plain --frames 30 --json " + json_file.string());
+  ASSERT_EQ(out.exit_code, 0) << out.stderr_text;
+  for (const char* row : {"features", "coarse", "judge", "fine", "map update", "tracking total",
+                          "bundle adj. per keyframe"}) {
+    EXPECT_NE(out.stdout_text.find(row), std::string::npos) << row << " missing from:\n" << out.stdout_text;
+  }
+  const nlohmann::json json = nlohmann::json::parse(ReadText(json_file));
+  EXPECT_EQ(json.at("frames"), 30);
+  EXPECT_EQ(json.at("mode"), "plain");
+  const nlohmann::json& stages = json.at("stages_ms");
+  EXPECT_GT(stages.at("features").at("median").get<double>(), 0.0);
+  EXPECT_GT(stages.at("coarse").at("median").get<double>(), 0.0);
+  EXPECT_EQ(stages.at("judge").at("median").get<double>(), 0.0) << "plain mode judges nothing";
+  const double total = stages.at("tracking total").at("median").get<double>();
+  EXPECT_GE(total, stages.at("features").at("median").get<double>());
+  // The camera moves 30 frames: more than the first keyframe, each bundle-adjusted.
+  const nlohmann::json& ba = json.at("bundle_adjustment_per_keyframe_ms");
+  EXPECT_GE(ba.at("keyframes").get<int>(), 1);
+  EXPECT_GT(ba.at("median").get<double>(), 0.0);
+}
+
+TEST_F(BenchCliTest, SlamOnASequenceWithoutCameraNeedsCamera) {
+  const fs::path source = kDataDir / "office_static" / "pass1";
+  ASSERT_TRUE(fs::is_directory(source)) << source;
+  const fs::path copy = dir_ / "sequence";
+  fs::copy(source, copy, fs::copy_options::recursive);
+  const fs::path camera = dir_ / "camera.yaml";
+  fs::rename(copy / "camera.yaml", camera);
+  const CommandOutput refused = Run("bench slam " + copy.string() + " --mode plain --frames 3");
+  EXPECT_EQ(refused.exit_code, 1);
+  EXPECT_NE(refused.stderr_text.find((copy / "camera.yaml").string()), std::string::npos) << refused.stderr_text;
+  const CommandOutput given = Run("bench slam " + copy.string() + " --mode plain --frames 3 --camera " + camera.string());
+  EXPECT_EQ(given.exit_code, 0) << given.stderr_text;
+}
+
+}  // namespace
