@@ -216,6 +216,12 @@ TumSequence TumSequence::Open(const std::filesystem::path& dir,
   if (!std::filesystem::is_directory(dir, ec)) {
     throw FileError(dir, "sequence directory does not exist");
   }
+  // A folder with no frame list at all is not a sequence: say so before asking for
+  // its camera (a two-pass dataset's root, or the wrong folder).
+  if (!std::filesystem::exists(dir / "associations.txt") && !std::filesystem::exists(dir / "rgb.txt") &&
+      !std::filesystem::exists(dir / "depth.txt")) {
+    throw FileError(dir, "not a TUM-layout sequence: no associations.txt, rgb.txt or depth.txt");
+  }
   TumSequence sequence;
   sequence.dir_ = dir;
 

@@ -1,6 +1,7 @@
 #include "core/tum_dataset.h"
 
 #include <fstream>
+#include <optional>
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
@@ -189,6 +190,13 @@ TEST_F(TumDatasetTest, OpenErrors) {
   std::filesystem::remove(seq_dir / "depth.txt");
   message = ErrorMessage([&] { TumSequence::Open(seq_dir, SmallCamera()); });
   EXPECT_NE(message.find("depth.txt"), std::string::npos) << message;
+
+  // No list at all: not a sequence, whatever its camera.
+  std::filesystem::remove(seq_dir / "rgb.txt");
+  for (const std::optional<SequenceCamera>& camera : {std::optional<SequenceCamera>(), std::optional(SmallCamera())}) {
+    message = ErrorMessage([&] { TumSequence::Open(seq_dir, camera); });
+    EXPECT_NE(message.find(seq_dir.string() + ": not a TUM-layout sequence"), std::string::npos) << message;
+  }
 }
 
 TEST(TumSequenceRealData, SevenScenesRedKitchen) {
