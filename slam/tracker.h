@@ -253,6 +253,8 @@ class Tracker {
   // `include_instances` (the plain baseline). In localization mode: the loaded map as is.
   LongTermMapData ExportLongTermMap(bool include_instances) const;
 
+  // The current map; a map reset (FrameResult::map_reset) replaces it, so a reference
+  // is good until the next frame.
   const Map& map() const { return *map_; }
   const PinholeCamera& camera() const { return camera_; }
   const TrackerOptions& options() const { return options_; }
