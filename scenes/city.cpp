@@ -288,8 +288,8 @@ class CityBuilder {
     for (int i = 0; i < n; ++i) {
       RedLight r = candidates[(2 * i + 1) * candidates.size() / (2 * n)];  // spread over the route
       if (i % 2 == 0) {
-        r.lead_kind = VehicleKind(rng, /*allow_bus=*/true);  // drawn either way: the same
-                                                              // draws for the other lights
+        // Drawn even where the scenario names the kind, so the other lights draw as before.
+        r.lead_kind = VehicleKind(rng, /*allow_bus=*/true);
         if (spec_.red_light_lead != "random") r.lead_kind = spec_.red_light_lead;
         double half_length, half_width;
         VehicleSize(r.lead_kind, &half_length, &half_width);
