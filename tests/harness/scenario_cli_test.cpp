@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include "tests/harness/cli_runner.h"
 
@@ -147,6 +148,33 @@ TEST_F(ScenarioCliTest, TinyRunWritesTheReportAndItsExitCodeFollowsTheThresholds
   EXPECT_NE(narrowed.stdout_text.find("figure not drawn: figures/features_kept_vs_dropped.png"), std::string::npos)
       << narrowed.stdout_text;
   EXPECT_EQ(ReadText(dir_ / "report3" / "report.md").find("features_kept_vs_dropped"), std::string::npos);
+
+  // Beside the dataset, a record of the build that generated it. prune-cache keeps this
+  // build's dataset and removes another build's (listing it first with --dry-run).
+  std::vector<fs::path> records;
+  for (const auto& entry : fs::directory_iterator(cache)) {
+    if (entry.path().extension() == ".json") records.push_back(entry.path());
+  }
+  ASSERT_EQ(records.size(), 1u);
+  const fs::path dataset = records[0].parent_path() / records[0].stem();
+  EXPECT_TRUE(fs::is_directory(dataset / "pass1")) << dataset;
+  EXPECT_EQ(nlohmann::json::parse(ReadText(records[0]))["code_version"], results["code_version"]);
+  const fs::path other_build = fs::path(cache) / "office_small-aaaaaaaaaaaa";
+  fs::create_directories(other_build);
+  fs::copy(dataset / "manifest.json", other_build / "manifest.json");
+  std::ofstream(fs::path(cache) / "office_small-aaaaaaaaaaaa.json") << R"({"code_version": "v0.1-old"})";
+  const CommandOutput dry = Run("scenario prune-cache --dry-run --cache " + cache);
+  EXPECT_EQ(dry.exit_code, 0) << dry.stderr_text;
+  EXPECT_NE(dry.stdout_text.find("v0.1-old"), std::string::npos) << dry.stdout_text;
+  EXPECT_NE(dry.stdout_text.find("would remove 1 dataset(s)"), std::string::npos) << dry.stdout_text;
+  EXPECT_TRUE(fs::exists(other_build));
+  const CommandOutput pruned = Run("scenario prune-cache --cache " + cache);
+  EXPECT_EQ(pruned.exit_code, 0) << pruned.stderr_text;
+  EXPECT_NE(pruned.stdout_text.find("kept (this build)"), std::string::npos) << pruned.stdout_text;
+  EXPECT_FALSE(fs::exists(other_build));
+  EXPECT_FALSE(fs::exists(fs::path(cache) / "office_small-aaaaaaaaaaaa.json"));
+  EXPECT_TRUE(fs::exists(dataset / "manifest.json"));
+  EXPECT_TRUE(fs::exists(records[0]));
 }
 
 }  // namespace

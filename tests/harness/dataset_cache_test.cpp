@@ -1,0 +1,99 @@
+// The dataset cache's records and pruning (harness/dataset_cache.h) on a hand-made cache
+// folder: what counts as a dataset, which are stale, and that nothing else is touched.
+#include "harness/dataset_cache.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "core/error.h"
+
+namespace segslam::harness {
+namespace {
+
+namespace fs = std::filesystem;
+
+class DatasetCacheTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    cache_ = fs::temp_directory_path() / ("segslam_dataset_cache_" + std::to_string(::getpid()) + "_" +
+                                          ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(cache_);
+    fs::create_directories(cache_);
+  }
+  void TearDown() override { fs::remove_all(cache_); }
+
+  // A folder with a segslam manifest and one frame's worth of bytes.
+  fs::path MakeDataset(const std::string& name) {
+    const fs::path dir = cache_ / name;
+    fs::create_directories(dir / "pass1");
+    std::ofstream(dir / "manifest.json") << R"({"format": "segslam-manifest-1", "files": []})";
+    std::ofstream(dir / "pass1" / "frame.png") << std::string(1000, 'x');
+    return dir;
+  }
+
+  fs::path cache_;
+};
+
+TEST_F(DatasetCacheTest, ListsDatasetsAndLeftoversOnlyAndTellsWhichAreStale) {
+  RecordCachedDataset(MakeDataset("office-0123456789ab"), "office", 0, "v2");
+  RecordCachedDataset(MakeDataset("office-aaaaaaaaaaaa"), "office", 25, "v1");
+  MakeDataset("city-bbbbbbbbbbbb");                                   // no record
+  MakeDataset(".city-cccccccccccc.partial-2147483000");              // its process is gone
+  MakeDataset(".city-dddddddddddd.partial-" + std::to_string(::getpid()));  // still at work
+  MakeDataset("photos");                                              // not a cache name
+  fs::create_directories(cache_ / "notes-eeeeeeeeeeee");              // no manifest
+  std::ofstream(cache_ / "file-ffffffffffff") << "not a folder";
+
+  const std::vector<CachedDataset> entries = ListDatasetCache(cache_);
+  ASSERT_EQ(entries.size(), 4u);
+  EXPECT_EQ(entries[0].dir.filename(), ".city-cccccccccccc.partial-2147483000");
+  EXPECT_TRUE(entries[0].leftover);
+  EXPECT_EQ(entries[1].dir.filename(), "city-bbbbbbbbbbbb");
+  EXPECT_EQ(entries[1].code_version, "");
+  EXPECT_EQ(entries[2].dir.filename(), "office-0123456789ab");
+  EXPECT_EQ(entries[2].code_version, "v2");
+  EXPECT_EQ(entries[3].code_version, "v1");
+  for (const CachedDataset& entry : entries) EXPECT_GE(entry.bytes, 1000u) << entry.dir;
+
+  EXPECT_TRUE(IsStale(entries[0], "v2"));
+  EXPECT_TRUE(IsStale(entries[1], "v2"));
+  EXPECT_FALSE(IsStale(entries[2], "v2"));
+  EXPECT_TRUE(IsStale(entries[3], "v2"));
+  EXPECT_FALSE(IsStale(entries[3], "v1"));
+
+  const nlohmann::json record = nlohmann::json::parse(std::ifstream(cache_ / "office-aaaaaaaaaaaa.json"));
+  EXPECT_EQ(record["scenario"], "office");
+  EXPECT_EQ(record["frames_per_pass_limit"], 25);
+}
+
+TEST_F(DatasetCacheTest, RemovingADatasetTakesItsRecordAndNothingElse) {
+  const fs::path old = MakeDataset("office-aaaaaaaaaaaa");
+  RecordCachedDataset(old, "office", 0, "v1");
+  const fs::path current = MakeDataset("office-0123456789ab");
+  RecordCachedDataset(current, "office", 0, "v2");
+  for (const CachedDataset& entry : ListDatasetCache(cache_)) {
+    if (IsStale(entry, "v2")) RemoveCachedDataset(entry);
+  }
+  EXPECT_FALSE(fs::exists(old));
+  EXPECT_FALSE(fs::exists(cache_ / "office-aaaaaaaaaaaa.json"));
+  EXPECT_TRUE(fs::exists(current / "pass1" / "frame.png"));
+  EXPECT_TRUE(fs::exists(cache_ / "office-0123456789ab.json"));
+}
+
+TEST_F(DatasetCacheTest, AMissingCacheListsNothingAndAnUnreadableRecordCountsAsNone) {
+  EXPECT_TRUE(ListDatasetCache(cache_ / "missing").empty());
+  MakeDataset("office-0123456789ab");
+  std::ofstream(cache_ / "office-0123456789ab.json") << "{ not json";
+  const std::vector<CachedDataset> entries = ListDatasetCache(cache_);
+  ASSERT_EQ(entries.size(), 1u);
+  EXPECT_EQ(entries[0].code_version, "");
+  EXPECT_TRUE(IsStale(entries[0], "v2"));
+}
+
+}  // namespace
+}  // namespace segslam::harness
