@@ -11,29 +11,27 @@
 #include <string>
 
 #include "core/error.h"
+#include "tests/core/test_util.h"
 
 namespace segslam::harness {
 namespace {
 
 namespace fs = std::filesystem;
 
-class DatasetCacheTest : public ::testing::Test {
+class DatasetCacheTest : public segslam::testing::TempDirTest {
  protected:
   void SetUp() override {
-    cache_ = fs::temp_directory_path() / ("segslam_dataset_cache_" + std::to_string(::getpid()) + "_" +
-                                          ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(cache_);
-    fs::create_directories(cache_);
+    TempDirTest::SetUp();
+    cache_ = dir();
   }
-  void TearDown() override { fs::remove_all(cache_); }
 
   // A folder with a segslam manifest and one frame's worth of bytes.
   fs::path MakeDataset(const std::string& name) {
-    const fs::path dir = cache_ / name;
-    fs::create_directories(dir / "pass1");
-    std::ofstream(dir / "manifest.json") << R"({"format": "segslam-manifest-1", "files": []})";
-    std::ofstream(dir / "pass1" / "frame.png") << std::string(1000, 'x');
-    return dir;
+    const fs::path folder = cache_ / name;
+    fs::create_directories(folder / "pass1");
+    std::ofstream(folder / "manifest.json") << R"({"format": "segslam-manifest-1", "files": []})";
+    std::ofstream(folder / "pass1" / "frame.png") << std::string(1000, 'x');
+    return folder;
   }
 
   fs::path cache_;
