@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <limits>
 #include <regex>
 #include <signal.h>
+#include <sys/types.h>
 #include <system_error>
 
 #include <nlohmann/json.hpp>
@@ -45,7 +47,11 @@ std::uintmax_t FolderBytes(const fs::path& dir) {
   return bytes;
 }
 
-bool ProcessIsGone(long pid) { return pid > 0 && ::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH; }
+// Signal 0 only asks whether the process exists; a number no pid can be names none.
+bool ProcessIsGone(long long pid) {
+  if (pid <= 0 || pid > std::numeric_limits<pid_t>::max()) return true;
+  return ::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH;
+}
 
 }  // namespace
 
@@ -58,7 +64,7 @@ void RecordCachedDataset(const fs::path& dataset_dir, const std::string& scenari
 
 std::vector<CachedDataset> ListDatasetCache(const fs::path& cache_dir) {
   static const std::regex kDataset(R"(.+-[0-9a-f]{12})");
-  static const std::regex kLeftover(R"(\..+-[0-9a-f]{12}\.(partial|old)-([0-9]+))");
+  static const std::regex kLeftover(R"(\..+-[0-9a-f]{12}\.(partial|old)-([0-9]{1,10}))");
   std::vector<CachedDataset> entries;
   std::error_code error;
   if (!fs::is_directory(cache_dir, error)) return entries;
@@ -70,7 +76,7 @@ std::vector<CachedDataset> ListDatasetCache(const fs::path& cache_dir) {
     CachedDataset entry;
     entry.dir = item.path();
     if (std::regex_match(name, match, kLeftover)) {
-      if (!ProcessIsGone(std::stol(match[2].str()))) continue;  // a generation still at work
+      if (!ProcessIsGone(std::stoll(match[2].str()))) continue;  // a generation still at work
       entry.leftover = true;
     } else if (std::regex_match(name, kDataset) && HoldsSegslamManifest(item.path())) {
       const fs::path record = RecordPath(item.path());
