@@ -45,9 +45,17 @@ struct RunArgs {
   bool quiet = false;
 };
 
-void PrintPass(const PassRun& pass) {
+// Real sequences have long names ("rgbd_dataset_freiburg3_walking_xyz"); the column fits them.
+int NameWidth(const std::vector<PassRun>& passes) {
+  size_t width = 8;
+  for (const PassRun& pass : passes) width = std::max(width, pass.name.size());
+  return static_cast<int>(width);
+}
+
+void PrintPass(const PassRun& pass, int name_width) {
   const SlamRunResult& run = pass.run;
-  fmt::print("{:<8} {:>6} {:>9.1f}% {:>9} {:>9} {:>10.2f}", pass.name, run.frames.size(), 100 * run.LocalizedShare(),
+  fmt::print("{:<{}} {:>6} {:>9.1f}% {:>9} {:>9} {:>10.2f}", pass.name, name_width, run.frames.size(),
+             100 * run.LocalizedShare(),
              run.keyframes, run.map_points, run.MedianTrackingMs());
   if (pass.ate.has_value()) {
     fmt::print(" {:>10.4f} {:>10.4f}  {}\n", pass.ate->translation_m.rmse, pass.ate->translation_m.max,
@@ -75,18 +83,20 @@ std::string Points(double value) { return std::isnan(value) ? "  n/a" : fmt::for
 
 // The segmentation-in-the-loop table, as seg-eval prints it with ground-truth poses.
 void PrintLoopSegmentation(const std::vector<PassRun>& passes) {
+  const int name_width = NameWidth(passes);
   bool header = false;
   for (const PassRun& pass : passes) {
     if (!pass.run.segmentation.has_value()) continue;
     const LoopSegmentationScores& s = *pass.run.segmentation;
     if (!header) {
       fmt::print("\nSegmentation in the loop (SLAM poses), segmenter {}\n", s.segmenter);
-      fmt::print("{:<8} {:>6} | {:>6} {:>6} {:>6} | {:>6} {:>6} {:>6} | {:>6} {:>6} {:>6}\n", "sequence", "frames",
-                 "mAP", "AP50", "mIoU", "mAP", "AP50", "mIoU", "dmAP", "dAP50", "dmIoU");
-      fmt::print("{:<8} {:>6} | {:^20} | {:^20} | {:^20}\n", "", "", "raw", "refined", "refined - raw");
+      fmt::print("{:<{}} {:>6} | {:>6} {:>6} {:>6} | {:>6} {:>6} {:>6} | {:>6} {:>6} {:>6}\n", "sequence", name_width,
+                 "frames", "mAP", "AP50", "mIoU", "mAP", "AP50", "mIoU", "dmAP", "dAP50", "dmIoU");
+      fmt::print("{:<{}} {:>6} | {:^20} | {:^20} | {:^20}\n", "", name_width, "", "raw", "refined", "refined - raw");
       header = true;
     }
-    fmt::print("{:<8} {:>6} | {} {} {} | {} {} {} | {} {} {}\n", pass.name, pass.run.frames.size(), Points(s.raw.mAP),
+    fmt::print("{:<{}} {:>6} | {} {} {} | {} {} {} | {} {} {}\n", pass.name, name_width, pass.run.frames.size(),
+               Points(s.raw.mAP),
                Points(s.raw.AP50), Points(s.raw.mIoU), Points(s.refined.mAP), Points(s.refined.AP50),
                Points(s.refined.mIoU), Points(s.refined.mAP - s.raw.mAP), Points(s.refined.AP50 - s.raw.AP50),
                Points(s.refined.mIoU - s.raw.mIoU));
@@ -143,9 +153,10 @@ int RunRun(const RunArgs& args) {
   };
   const std::vector<PassRun> passes = RunDataset(dataset, out_dir, options);
   if (bar.has_value()) bar->Finish();
-  fmt::print("\n{:<8} {:>6} {:>10} {:>9} {:>9} {:>10} {:>10} {:>10}\n", "sequence", "frames", "localized",
-             "keyframes", "points", "track ms", "ATE rmse m", "ATE max m");
-  for (const PassRun& pass : passes) PrintPass(pass);
+  const int name_width = NameWidth(passes);
+  fmt::print("\n{:<{}} {:>6} {:>10} {:>9} {:>9} {:>10} {:>10} {:>10}\n", "sequence", name_width, "frames",
+             "localized", "keyframes", "points", "track ms", "ATE rmse m", "ATE max m");
+  for (const PassRun& pass : passes) PrintPass(pass, name_width);
   PrintMapResets(passes);
   PrintLoopSegmentation(passes);
   fmt::print("outputs in {}\n", out_dir.string());
@@ -176,7 +187,7 @@ void AddRunCommand(CLI::App& app, std::function<int()>* action) {
       ->capture_default_str();
   cmd->add_option("--map-in", args->map_in, "Localize on this long-term map (single sequence)");
   cmd->add_option("--map-out", args->map_out, "Write the long-term map here (and a .ply beside it)");
-  cmd->add_option("--out", args->out_dir, "Output folder (default DATASET/run_MODE)");
+  cmd->add_option("--out,-o", args->out_dir, "Output folder (default DATASET/run_MODE)");
   cmd->add_option("--frames", args->frames, "Only the first N frames of each sequence (0 = all)");
   cmd->add_option("--camera", args->camera_file,
                   "camera.yaml to use instead of the sequence's own (for a real sequence without one)");

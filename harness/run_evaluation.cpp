@@ -383,13 +383,17 @@ nlohmann::json RunEvaluation::ToJson() const {
 }
 
 std::string RunEvaluation::Table() const {
+  // Real sequences have long names ("rgbd_dataset_freiburg3_walking_xyz"); the column fits them.
+  size_t name_width = 8;
+  for (const PassEvaluation& p : passes) name_width = std::max(name_width, p.name.size());
   std::string text;
-  text += fmt::format("{:<8} {:>6} {:>9} | {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:<9} | {:>9} {:>9}\n", "sequence",
-                      "frames", "localized", "rmse", "mean", "median", "std", "min", "max", "", "trans m", "rot deg");
-  text += fmt::format("{:<8} {:>6} {:>9} | {:^64} | {:^19}\n", "", "", "%", "ATE [m]", "RPE rmse per s");
+  text += fmt::format("{:<{}} {:>6} {:>9} | {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:<9} | {:>9} {:>9}\n", "sequence",
+                      name_width, "frames", "localized", "rmse", "mean", "median", "std", "min", "max", "", "trans m",
+                      "rot deg");
+  text += fmt::format("{:<{}} {:>6} {:>9} | {:^63} | {:^19}\n", "", name_width, "", "%", "ATE [m]", "RPE rmse per s");
   for (const PassEvaluation& p : passes) {
-    text += fmt::format("{:<8} {:>6} {:>9} | {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:<9} | {:>9} {:>9}\n", p.name,
-                        p.frames, Percent(p.LocalizedShare()), Fixed(p.ate_m, &ErrorStatistics::rmse, 4),
+    text += fmt::format("{:<{}} {:>6} {:>9} | {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:<9} | {:>9} {:>9}\n", p.name,
+                        name_width, p.frames, Percent(p.LocalizedShare()), Fixed(p.ate_m, &ErrorStatistics::rmse, 4),
                         Fixed(p.ate_m, &ErrorStatistics::mean, 4), Fixed(p.ate_m, &ErrorStatistics::median, 4),
                         Fixed(p.ate_m, &ErrorStatistics::std, 4), Fixed(p.ate_m, &ErrorStatistics::min, 4),
                         Fixed(p.ate_m, &ErrorStatistics::max, 4), p.ate_m ? (p.ate_aligned ? "aligned" : "map frame") : "",
@@ -403,12 +407,13 @@ std::string RunEvaluation::Table() const {
 
   const bool any_seg = std::any_of(passes.begin(), passes.end(), [](const auto& p) { return p.seg_raw.has_value(); });
   if (any_seg) {
-    text += fmt::format("\nSegmentation in the loop (percent)\n{:<8} | {:>6} {:>6} {:>6} | {:>6} {:>6} {:>6}\n",
-                        "sequence", "mAP", "AP50", "mIoU", "mAP", "AP50", "mIoU");
-    text += fmt::format("{:<8} | {:^20} | {:^20}\n", "", "raw", "refined");
+    text += fmt::format("\nSegmentation in the loop (percent)\n{:<{}} | {:>6} {:>6} {:>6} | {:>6} {:>6} {:>6}\n",
+                        "sequence", name_width, "mAP", "AP50", "mIoU", "mAP", "AP50", "mIoU");
+    text += fmt::format("{:<{}} | {:^20} | {:^20}\n", "", name_width, "raw", "refined");
     for (const PassEvaluation& p : passes) {
       if (!p.seg_raw.has_value()) continue;
-      text += fmt::format("{:<8} | {:>6} {:>6} {:>6} | {:>6} {:>6} {:>6}\n", p.name, Percent(p.seg_raw->mAP),
+      text += fmt::format("{:<{}} | {:>6} {:>6} {:>6} | {:>6} {:>6} {:>6}\n", p.name, name_width,
+                          Percent(p.seg_raw->mAP),
                           Percent(p.seg_raw->AP50), Percent(p.seg_raw->mIoU), Percent(p.seg_refined->mAP),
                           Percent(p.seg_refined->AP50), Percent(p.seg_refined->mIoU));
     }
@@ -422,8 +427,8 @@ std::string RunEvaluation::Table() const {
     text += fmt::format("\nMoving-object detection over judged instances vs tracks.json; coverage: the share of moving "
                         "instances seen (a feature on them, judged or not) that were judged moving; moving features: "
                         "the share of a frame's features on truly moving instances, mean and max over frames\n"
-                        "{:<8} {:>7} {:>9} {:>7} {:>5} {:>5} {:>5} {:>5} {:>8} {:>15}\n",
-                        "sequence", "judged", "precision", "recall", "tp", "fp", "fn", "tn", "coverage",
+                        "{:<{}} {:>7} {:>9} {:>7} {:>5} {:>5} {:>5} {:>5} {:>8} {:>15}\n",
+                        "sequence", name_width, "judged", "precision", "recall", "tp", "fp", "fn", "tn", "coverage",
                         "moving features");
     for (const PassEvaluation& p : passes) {
       if (!p.moving.has_value()) continue;
@@ -431,7 +436,8 @@ std::string RunEvaluation::Table() const {
       const std::string share = m.moving_feature_share.has_value()
                                     ? Percent(m.moving_feature_share->mean) + " / " + Percent(m.moving_feature_share->max)
                                     : "n/a";
-      text += fmt::format("{:<8} {:>7} {:>9} {:>7} {:>5} {:>5} {:>5} {:>5} {:>8} {:>15}\n", p.name, m.Judged(),
+      text += fmt::format("{:<{}} {:>7} {:>9} {:>7} {:>5} {:>5} {:>5} {:>5} {:>8} {:>15}\n", p.name, name_width,
+                          m.Judged(),
                           Percent(m.Precision()), Percent(m.Recall()), m.true_positives, m.false_positives,
                           m.false_negatives, m.true_negatives, Percent(m.Coverage()), share);
     }

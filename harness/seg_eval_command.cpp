@@ -221,7 +221,7 @@ void AddSegEvalCommand(CLI::App& app, std::function<int()>* action) {
                       "Override a simulated segmenter option, NAME=VALUE (repeatable; see seg/simulated_segmenter.h)");
   command->add_option("--refiner", args->refiner_options,
                       "Override a refiner option, NAME=VALUE (repeatable; see seg/refiner.h)");
-  command->add_option("--out", args->out_dir, "Where to write seg_eval.json and pictures "
+  command->add_option("--out,-o", args->out_dir, "Where to write seg_eval.json and pictures "
                                               "(default: DATASET/seg_eval)");
   command->callback([args, action] { *action = [args] { return RunSegEval(*args); }; });
 }

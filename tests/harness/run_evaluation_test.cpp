@@ -9,6 +9,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -105,6 +106,36 @@ TEST_F(RunEvaluationTest, PassTwoIsScoredWithPassOnesAlignment) {
   const std::map<std::string, double> metrics = PassMetrics(pass2);
   EXPECT_NEAR(metrics.at("ate_rmse_m"), 0.1, 1e-6);
   EXPECT_TRUE(std::isnan(metrics.at("seg_refined_map")));
+}
+
+// A real sequence's folder name is longer than "pass1"; the columns still line up.
+TEST(RunEvaluationTableTest, ColumnsLineUpUnderALongSequenceName) {
+  RunEvaluation evaluation;
+  PassEvaluation pass;
+  pass.name = "rgbd_dataset_freiburg3_walking_xyz";
+  pass.frames = 859;
+  pass.localized_frames = 859;
+  pass.ate_m = ErrorStatistics{};
+  pass.rpe_translation_m = ErrorStatistics{};
+  pass.rpe_rotation_deg = ErrorStatistics{};
+  evaluation.passes.push_back(pass);
+  pass.name = "short";
+  evaluation.passes.push_back(pass);
+
+  std::istringstream table(evaluation.Table());
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(table, line) && lines.size() < 4;) lines.push_back(line);
+  ASSERT_EQ(lines.size(), 4u);  // two header lines, two passes
+  EXPECT_EQ(lines[2].rfind("rgbd_dataset_freiburg3_walking_xyz ", 0), 0u) << lines[2];
+  const size_t first_bar = lines[0].find('|');
+  ASSERT_NE(first_bar, std::string::npos);
+  EXPECT_GT(first_bar, pass.name.size() + std::string(" frames localized ").size());
+  for (const std::string& line : lines) {
+    EXPECT_EQ(line.find('|'), first_bar) << line;
+    EXPECT_EQ(line.rfind('|'), lines[0].rfind('|')) << line;
+  }
+  // The frame count ends where its header does.
+  EXPECT_EQ(lines[2].find(" 859 ") + 4, lines[0].find("frames") + 6);
 }
 
 TEST_F(RunEvaluationTest, MovingDetectionCountsJudgedInstancesAgainstTracks) {
