@@ -139,6 +139,7 @@ PoseOptimizationResult OptimizePose(const Eigen::Isometry3d& T_cw_initial,
       break;
     }
     const bool robust = round + 1 < options.rounds;
+    const std::vector<bool> optimized_over = use;
     ceres::Problem problem(problem_options);
     problem.AddParameterBlock(pose, kPoseAmbientSize, &manifold);
     for (size_t i = 0; i < observations.size(); ++i) {
@@ -149,9 +150,15 @@ PoseOptimizationResult OptimizePose(const Eigen::Isometry3d& T_cw_initial,
     }
     ceres::Solver::Summary summary;
     ceres::Solve(solver_options, &problem, &summary);
+    ++result.rounds_run;
     last_round_converged = summary.termination_type == ceres::CONVERGENCE;
     num_used = ClassifyObservations(model, internal::PoseFromParameters(pose), observations,
                                     options, &use);
+    // The next round would minimise the same sum from the point where this one converged:
+    // every observation it would use is within its chi2 threshold here, where the Huber
+    // loss equals the squared error, so dropping the loss changes nothing either. Tracking
+    // calls this three times a frame, and such rounds cost a Ceres solve set-up each.
+    if (last_round_converged && use == optimized_over) break;
   }
 
   result.T_cw = internal::PoseFromParameters(pose);

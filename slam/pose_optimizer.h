@@ -36,6 +36,7 @@ struct PoseOptimizationResult {
   // True when the last round's solver converged with at least 3 inliers in it (fewer
   // do not determine a pose).
   bool converged = false;
+  int rounds_run = 0;  // at most options.rounds; fewer after an early stop (below)
 };
 
 // Every round but the last uses a Huber loss (delta = sqrt of the chi2 threshold). The
@@ -43,7 +44,10 @@ struct PoseOptimizationResult {
 // round every observation is judged afresh at the new pose (so an outlier can come back):
 // inlier when its point lies in front of the camera and its information-weighted squared
 // error is within chi2_mono (2-D) or chi2_stereo (3-D). The next round uses the inliers
-// only; rounds stop early when fewer than 3 remain. Single-threaded, deterministic.
+// only; rounds stop early when fewer than 3 remain, or when a round converged and the
+// judgement at its result keeps exactly the observations it used (the next round would
+// start at its own optimum: Huber and squared loss agree within the thresholds).
+// Single-threaded, deterministic.
 // Throws segslam::Error for an invalid camera, non-finite input, information <= 0,
 // rounds or iterations < 1, or stereo observations with bf <= 0.
 PoseOptimizationResult OptimizePose(const Eigen::Isometry3d& T_cw_initial,

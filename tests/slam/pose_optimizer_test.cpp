@@ -120,6 +120,28 @@ TEST(PoseOptimizerTest, GrossOutliersAreFlaggedAndDoNotBiasThePose) {
   EXPECT_EQ(r.num_inliers, good_kept);
 }
 
+// A round that converges and keeps every observation it used ends the optimisation; one
+// that changes the set is followed by another on the new set.
+TEST(PoseOptimizerTest, StopsOnceARoundKeepsTheObservationsItUsed) {
+  const Scene clean = MakeScene(200, Kind::kMixed, 0.0, 4);
+  const PoseOptimizationResult r =
+      OptimizePose(Perturbed(clean.T_cw_true), clean.observations, TestCamera(), Options());
+  EXPECT_EQ(r.rounds_run, 1);
+  EXPECT_EQ(r.num_inliers, 200);
+  EXPECT_LT(CentreError(r.T_cw, clean.T_cw_true), 1e-3);
+
+  Scene corrupted = MakeScene(200, Kind::kMixed, 0.3, 4);
+  for (size_t i = 0; i < corrupted.observations.size(); i += 5) {
+    corrupted.observations[i].pixel += Eigen::Vector2d(40, -30);
+  }
+  const PoseOptimizationResult o =
+      OptimizePose(Perturbed(corrupted.T_cw_true), corrupted.observations, TestCamera(), Options());
+  EXPECT_GE(o.rounds_run, 2);  // the first round uses the outliers, the second does not
+  EXPECT_LE(o.rounds_run, Options().rounds);
+  EXPECT_LE(o.num_inliers, 160);
+  EXPECT_LT(CentreError(o.T_cw, corrupted.T_cw_true), 0.01);
+}
+
 TEST(PoseOptimizerTest, InformationScalesTheChi2Gate) {
   // A 2-pixel error gives chi2 4 at information 1 (inside 5.991) but 8 at information 2.
   for (double information : {1.0, 2.0}) {
