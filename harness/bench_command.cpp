@@ -6,6 +6,7 @@
 #include "core/error.h"
 #include "core/tum_dataset.h"
 #include "harness/commands.h"
+#include "harness/machine.h"
 #include "harness/progress_bar.h"
 #include "harness/slam_runner.h"
 #include "scenes/scenario.h"
@@ -77,9 +78,9 @@ int RunBenchRender(const BenchRenderArgs& args) {
     results.push_back(result);
   }
 
-  fmt::print("scenario {} ({}x{}), {} frames per back-end, {} cores\n", scenario.name,
-             scenario.camera.width, scenario.camera.height, results.empty() ? 0 : results[0].frames,
-             std::thread::hardware_concurrency());
+  const nlohmann::json machine = MachineDescription();
+  fmt::print("scenario {} ({}x{}), {} frames per back-end, on {}\n", scenario.name, scenario.camera.width,
+             scenario.camera.height, results.empty() ? 0 : results[0].frames, MachineLine(machine));
   fmt::print("{:<8} {:>16} {:>16}  {}\n", "back-end", "generation fps", "render-only fps",
              "GL renderer");
   for (const auto& r : results) {
@@ -87,7 +88,8 @@ int RunBenchRender(const BenchRenderArgs& args) {
                r.renderer);
   }
   if (!args.json_file.empty()) {
-    nlohmann::json json = {{"scenario", scenario.name}, {"cores", std::thread::hardware_concurrency()}};
+    nlohmann::json json = {
+        {"scenario", scenario.name}, {"cores", std::thread::hardware_concurrency()}, {"machine", machine}};
     for (const auto& r : results) {
       json["backends"].push_back({{"backend", r.backend},
                                   {"renderer", r.renderer},
@@ -153,11 +155,14 @@ int RunBenchSlam(const BenchSlamArgs& args) {
     for (size_t k = 0; k < stages.size(); ++k) stages[k].second.push_back(values[k]);
     if (frame.keyframe && t.bundle_adjustment_ms > 0) bundle_adjustment.push_back(t.bundle_adjustment_ms);
   }
-  fmt::print("sequence {} ({}x{}), mode {}, {} frames, {} features requested, one core\n", args.sequence,
+  // Per-frame times depend on the CPU (1.7x apart on two machines of the same kind): name it.
+  const nlohmann::json machine = MachineDescription();
+  fmt::print("sequence {} ({}x{}), mode {}, {} frames, {} features requested, one core of {}\n", args.sequence,
              sequence.camera().intrinsics.width, sequence.camera().intrinsics.height, args.mode,
-             run.frames.size(), slam::TrackerOptions().orb.max_features);
+             run.frames.size(), slam::TrackerOptions().orb.max_features, MachineLine(machine));
   fmt::print("{:<26} {:>10} {:>10} {:>10}\n", "stage (ms per frame)", "median", "p90", "mean");
-  nlohmann::json json = {{"sequence", args.sequence}, {"mode", args.mode}, {"frames", run.frames.size()}};
+  nlohmann::json json = {
+      {"sequence", args.sequence}, {"mode", args.mode}, {"frames", run.frames.size()}, {"machine", machine}};
   for (const auto& [name, values] : stages) {
     const TimeSummary s = Summarize(values);
     fmt::print("{:<26} {:>10.2f} {:>10.2f} {:>10.2f}\n", name, s.median, s.p90, s.mean);

@@ -1,14 +1,10 @@
 #include "harness/scenario_report.h"
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <limits>
 #include <optional>
 #include <set>
-#include <thread>
 #include <tuple>
 
 #include <fmt/format.h>
@@ -20,6 +16,7 @@
 #include "core/pose.h"
 #include "core/tum_dataset.h"
 #include "harness/dataset_run.h"
+#include "harness/machine.h"
 #include "harness/report_figures.h"
 #include "harness/slam_runner.h"
 #include "harness/trajectory_metrics.h"
@@ -591,21 +588,6 @@ std::vector<ExpectationResult> CheckExpectations(const std::vector<Expectation>&
   return results;
 }
 
-nlohmann::json MachineDescription() {
-  char host[256] = {};
-  if (gethostname(host, sizeof(host) - 1) != 0) host[0] = '\0';
-  std::string cpu_model;
-  std::ifstream cpuinfo("/proc/cpuinfo");
-  for (std::string line; std::getline(cpuinfo, line);) {
-    if (line.rfind("model name", 0) == 0) {
-      const auto colon = line.find(':');
-      if (colon != std::string::npos) cpu_model = line.substr(line.find_first_not_of(' ', colon + 1));
-      break;
-    }
-  }
-  return {{"hostname", host}, {"cpu_model", cpu_model}, {"cores", std::thread::hardware_concurrency()}};
-}
-
 nlohmann::json ScenarioReport::ToJson() const {
   nlohmann::json json = {
       {"scenario", scenario_name},
@@ -657,9 +639,7 @@ ReportDocument ScenarioReport::ToDocument() const {
   ReportDocument document("segslam scenario report: " + scenario_name);
   document.AddMetadata("scenario file", scenario_file + (overrides.empty() ? "" : ", overrides " + Join(overrides, " ")));
   document.AddMetadata("code version", code_version);
-  const nlohmann::json machine = MachineDescription();
-  document.AddMetadata("machine", fmt::format("{}, {}, {} cores", machine["hostname"].get<std::string>(),
-                                              machine["cpu_model"].get<std::string>(), machine["cores"].get<unsigned>()));
+  document.AddMetadata("machine", MachineLine(MachineDescription()));
   document.AddMetadata("dataset", dataset_dir + (dataset_from_cache ? " (from the cache)" : "") +
                                       (frames_per_pass > 0 ? fmt::format(", first {} frames per pass", frames_per_pass) : ""));
   document.AddMetadata("bench", fmt::format("modes {}, {} repeat(s), segmenter {} with seeds {}..{}; deterministic modes "

@@ -108,8 +108,6 @@ SpreadTable Summarize(const std::vector<RepeatRun>& runs);
 
 std::vector<ExpectationResult> CheckExpectations(const std::vector<Expectation>& expectations, const SpreadTable& table);
 
-// Host name, CPU model and cores, for results.json.
-nlohmann::json MachineDescription();
 
 struct ScenarioReport {
   std::string scenario_name;

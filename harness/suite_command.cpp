@@ -27,6 +27,7 @@
 #include "core/error.h"
 #include "harness/commands.h"
 #include "harness/dataset_run.h"
+#include "harness/machine.h"
 #include "harness/report_document.h"
 #include "harness/scenario_runner.h"
 #include "scenes/scenario.h"
@@ -186,9 +187,7 @@ int RunSuite(const SuiteArgs& args) {
   ReportDocument document("segslam suite: " + suite.name);
   document.AddMetadata("suite file", args.suite_file);
   document.AddMetadata("code version", results.front().value("code_version", std::string("?")));
-  const nlohmann::json machine = results.front()["machine"];
-  document.AddMetadata("machine", fmt::format("{}, {}, {} cores", machine.value("hostname", std::string("?")),
-                                              machine.value("cpu_model", std::string("?")), machine.value("cores", 0u)));
+  document.AddMetadata("machine", MachineLine(results.front().value("machine", nlohmann::json())));
   const nlohmann::json bench = results.front()["bench"];
   const std::string segmenter =
       SimulatedSegmenterLabel(bench.value("segmenter", std::string("?")), bench.value("segmenter_strength", 1.0));

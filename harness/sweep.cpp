@@ -17,6 +17,7 @@
 #include "core/json_file.h"
 #include "harness/dataset_run.h"
 #include "harness/report_document.h"
+#include "harness/machine.h"
 #include "harness/report_figures.h"
 
 namespace segslam::harness {
@@ -433,11 +434,7 @@ std::string MergeSweep(const std::vector<fs::path>& inputs, const fs::path& out_
   for (const nlohmann::json& r : results) versions.insert(r.value("code_version", std::string("?")));
   document.AddMetadata("code version", Join({versions.begin(), versions.end()}, ", "));
   const nlohmann::json machine = results.front().value("machine", nlohmann::json());
-  if (machine.is_object()) {
-    document.AddMetadata("machine", fmt::format("{}, {}, {} cores", machine.value("hostname", std::string("?")),
-                                                machine.value("cpu_model", std::string("?")),
-                                                machine.value("cores", 0u)));
-  }
+  if (machine.is_object()) document.AddMetadata("machine", MachineLine(machine));
   // The segmenter can be an axis itself (bench.segmenter, bench.segmenter_strength).
   std::vector<std::string> segmenters;
   for (const nlohmann::json& r : results) {

@@ -37,6 +37,9 @@ TEST_F(BenchCliTest, SlamTimesEveryStageAndTheBundleAdjustment) {
   const nlohmann::json json = nlohmann::json::parse(ReadText(json_file));
   EXPECT_EQ(json.at("frames"), 30);
   EXPECT_EQ(json.at("mode"), "plain");
+  // Times mean little without the machine they were taken on.
+  EXPECT_GE(json.at("machine").at("cores").get<unsigned>(), 1u);
+  EXPECT_NE(out.stdout_text.find(" cores\n"), std::string::npos) << out.stdout_text;
   const nlohmann::json& stages = json.at("stages_ms");
   EXPECT_GT(stages.at("features").at("median").get<double>(), 0.0);
   EXPECT_GT(stages.at("coarse").at("median").get<double>(), 0.0);
