@@ -157,7 +157,7 @@ PoseOptimizationResult OptimizePose(const Eigen::Isometry3d& T_cw_initial,
     // The next round would minimise the same sum from the point where this one converged:
     // every observation it would use is within its chi2 threshold here, where the Huber
     // loss equals the squared error, so dropping the loss changes nothing either. Tracking
-    // calls this three times a frame, and such rounds cost a Ceres solve set-up each.
+    // calls this two to four times a frame, and such a round costs a Ceres solve set-up.
     if (last_round_converged && use == optimized_over) break;
   }
 
