@@ -164,7 +164,6 @@ SlamRunResult RunMutualLoop(const TumSequence& sequence, const SlamRunOptions& o
   seg::SegmentationEvaluator raw_scores, refined_scores;
   LoopSegmentationScores loop_scores;
   loop_scores.segmenter = segmenter->name();
-  std::vector<double> refine_ms;
 
   if (!options.refined_masks_dir.empty()) {
     std::error_code error;
@@ -181,7 +180,7 @@ SlamRunResult RunMutualLoop(const TumSequence& sequence, const SlamRunOptions& o
     frame.index = i;
     const mutual::MutualFrameResult step = loop.ProcessFrame(frame);
     AddFrame(step.slam, &result);
-    refine_ms.push_back(step.refine_ms);
+    result.refine_ms.push_back(step.refine_ms);
     loop_scores.refined_from_previous += step.refined_from_previous;
     for (const seg::RegionDecision& decision : step.decisions) {
       ++loop_scores.decision_counts[static_cast<int>(decision.kind)];
@@ -202,7 +201,7 @@ SlamRunResult RunMutualLoop(const TumSequence& sequence, const SlamRunOptions& o
   if (score) {
     loop_scores.raw = raw_scores.Scores();
     loop_scores.refined = refined_scores.Scores();
-    loop_scores.refine_ms_median = Median(refine_ms);
+    loop_scores.refine_ms_median = Median(result.refine_ms);
     result.segmentation = std::move(loop_scores);
   }
   result.long_term_map = loop.tracker().ExportLongTermMap(false);

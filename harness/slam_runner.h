@@ -75,6 +75,8 @@ struct SlamRunResult {
   std::vector<slam::FrameResult> frames;
   // Mutual loop on a sequence with ground-truth masks only.
   std::optional<LoopSegmentationScores> segmentation;
+  // Per frame, the mutual loop's mask refinement; empty where no loop ran (no segmenter).
+  std::vector<double> refine_ms;
   std::vector<StampedPose> trajectory;  // T_wc of the localized frames
   slam::LongTermMapData long_term_map;
   int keyframes = 0;

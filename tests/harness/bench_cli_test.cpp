@@ -1,7 +1,8 @@
 // `segslam bench slam` on a generated sequence (fixture sim_datasets): the per-stage
 // table and its JSON hold a time for every stage and the keyframes' bundle adjustment,
-// and a sequence without camera intrinsics needs --camera. Speed itself is what the
-// command measures, so nothing here asserts how fast.
+// with a segmenter the mask refinement's too, and a sequence without camera intrinsics
+// needs --camera. Speed itself is what the command measures, so nothing here asserts how
+// fast.
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -50,6 +51,32 @@ TEST_F(BenchCliTest, SlamTimesEveryStageAndTheBundleAdjustment) {
   const nlohmann::json& ba = json.at("bundle_adjustment_per_keyframe_ms");
   EXPECT_GE(ba.at("keyframes").get<int>(), 1);
   EXPECT_GT(ba.at("median").get<double>(), 0.0);
+}
+
+// With a segmenter, mutual runs the paper's whole loop: the masks' refinement is timed
+// beside tracking; a segmenter and an external folder together are refused.
+TEST_F(BenchCliTest, MutualLoopWithASegmenterTimesTheMaskRefinement) {
+  const fs::path sequence = kDataDir / "office_seg" / "pass1";
+  ASSERT_TRUE(fs::is_directory(sequence)) << sequence;
+  const fs::path json_file = dir_ / "bench.json";
+  const CommandOutput out = Run("bench slam " + sequence.string() +
+                                " --mode mutual --segmenter fcis-like --frames 12 --json " + json_file.string());
+  ASSERT_EQ(out.exit_code, 0) << out.stderr_text;
+  EXPECT_NE(out.stdout_text.find("masks segmenter fcis-like"), std::string::npos) << out.stdout_text;
+  EXPECT_NE(out.stdout_text.find("mask refinement"), std::string::npos) << out.stdout_text;
+  const nlohmann::json json = nlohmann::json::parse(ReadText(json_file));
+  EXPECT_EQ(json.at("masks"), "segmenter fcis-like");
+  EXPECT_GT(json.at("stages_ms").at("mask refinement").at("median").get<double>(), 0.0);
+  EXPECT_GT(json.at("stages_ms").at("judge").at("median").get<double>(), 0.0);
+
+  const CommandOutput gt = Run("bench slam " + sequence.string() + " --mode mutual --frames 3");
+  ASSERT_EQ(gt.exit_code, 0) << gt.stderr_text;
+  EXPECT_EQ(gt.stdout_text.find("mask refinement"), std::string::npos) << "no segmenter, no loop";
+
+  const CommandOutput both =
+      Run("bench slam " + sequence.string() + " --mode mutual --segmenter clean --masks " + dir_.string());
+  EXPECT_EQ(both.exit_code, 1);
+  EXPECT_NE(both.stderr_text.find("exclude each other"), std::string::npos) << both.stderr_text;
 }
 
 TEST_F(BenchCliTest, SlamOnASequenceWithoutCameraNeedsCamera) {
