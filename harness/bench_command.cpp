@@ -174,9 +174,8 @@ int RunBenchSlam(const BenchSlamArgs& args) {
              args.sequence, sequence.camera().intrinsics.width, sequence.camera().intrinsics.height, args.mode,
              masks, run.frames.size(), slam::TrackerOptions().orb.max_features, MachineLine(machine));
   fmt::print("{:<26} {:>10} {:>10} {:>10}\n", "stage (ms per frame)", "median", "p90", "mean");
-  nlohmann::json json = {
-      {"sequence", args.sequence}, {"mode", args.mode},       {"masks", masks},
-      {"frames", run.frames.size()}, {"machine", machine}};
+  nlohmann::json json = {{"sequence", args.sequence},     {"mode", args.mode},    {"masks", masks},
+                         {"frames", run.frames.size()}, {"machine", machine}};
   for (const auto& [name, values] : stages) {
     const TimeSummary s = Summarize(values);
     fmt::print("{:<26} {:>10.2f} {:>10.2f} {:>10.2f}\n", name, s.median, s.p90, s.mean);
@@ -213,7 +212,9 @@ void AddBenchCommand(CLI::App& app, std::function<int()>* action) {
   auto slam_args = std::make_shared<BenchSlamArgs>();
   CLI::App* slam = bench->add_subcommand(
       "slam", "Per-frame tracking time of the SLAM core by stage, and bundle adjustment per keyframe");
-  slam->add_option("sequence", slam_args->sequence, "A TUM-layout sequence (with masks/ for mutual and mask-moveable, unless --masks names a folder)")->required();
+  slam->add_option("sequence", slam_args->sequence,
+                   "A TUM-layout sequence (with masks/ for mutual and mask-moveable, unless --masks names a folder)")
+      ->required();
   slam->add_option("--mode", slam_args->mode, "plain, mask-moveable or mutual")
       ->check(CLI::IsMember({"plain", "mask-moveable", "mutual"}))
       ->capture_default_str();
