@@ -5,59 +5,26 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "tests/harness/cli_runner.h"
+
 #include <algorithm>
-#include <cstdlib>
-#include <iterator>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
-#include <sys/wait.h>
-#include <unistd.h>
 #include <vector>
 
 namespace {
 
 namespace fs = std::filesystem;
+using segslam::testing::CommandOutput;
+using segslam::testing::ReadText;
 
 const std::string kTumDir = SEGSLAM_SHARED_DATA_DIR "/tum_fr1_xyz_trajectories";
 
-struct CommandOutput {
-  int exit_code = -1;
-  std::string stdout_text, stderr_text;
-};
-
-std::string ReadText(const fs::path& file) {
-  std::ifstream in(file);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
-
-class EvalTrajCliTest : public ::testing::Test {
+class EvalTrajCliTest : public segslam::testing::CliScratchTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("segslam_eval_traj_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  CommandOutput RunSegslam(const std::string& arguments) {
-    const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
-    const std::string command = std::string(SEGSLAM_BINARY) + " " + arguments + " >" +
-                                out.string() + " 2>" + err.string();
-    const int status = std::system(command.c_str());
-    CommandOutput result;
-    result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    result.stdout_text = ReadText(out);
-    result.stderr_text = ReadText(err);
-    fs::remove(out);
-    fs::remove(err);
-    return result;
-  }
-
-  fs::path dir_;
+  EvalTrajCliTest() : CliScratchTest("segslam_eval_traj_") {}
 };
 
 // The whitespace-separated fields of the table row that starts with `metric`.
@@ -78,7 +45,7 @@ TEST_F(EvalTrajCliTest, ReproducesTumScriptsOnFr1Xyz) {
   if (!fs::exists(kTumDir)) GTEST_SKIP() << kTumDir << " not present";
   const fs::path json_file = dir_ / "eval.json";
   const CommandOutput result =
-      RunSegslam("eval-traj " + kTumDir + "/groundtruth.txt " + kTumDir +
+      Run("eval-traj " + kTumDir + "/groundtruth.txt " + kTumDir +
                  "/rgbdslam_estimate.txt --json " + json_file.string());
   ASSERT_EQ(result.exit_code, 0) << result.stderr_text;
 
@@ -110,7 +77,7 @@ TEST_F(EvalTrajCliTest, ReproducesTumScriptsOnFr1Xyz) {
 TEST_F(EvalTrajCliTest, RpeInFrames) {
   if (!fs::exists(kTumDir)) GTEST_SKIP() << kTumDir << " not present";
   const CommandOutput result =
-      RunSegslam("eval-traj " + kTumDir + "/groundtruth.txt " + kTumDir +
+      Run("eval-traj " + kTumDir + "/groundtruth.txt " + kTumDir +
                  "/rgbdslam_estimate.txt --rpe-delta 1 --rpe-unit f");
   ASSERT_EQ(result.exit_code, 0) << result.stderr_text;
   const std::vector<std::string> translation = RowFields(result.stdout_text, "RPE translation [m]");
@@ -128,7 +95,7 @@ TEST_F(EvalTrajCliTest, MissingFileIsOneLineNamingIt) {
   const fs::path ground_truth = dir_ / "groundtruth.txt";
   std::ofstream(ground_truth) << "# timestamp tx ty tz qx qy qz qw\n"
                                  "100.0 0 0 0 0 0 0 1\n100.1 0.1 0 0 0 0 0 1\n100.2 0.2 0 0 0 0 0 1\n";
-  const CommandOutput result = RunSegslam("eval-traj " + ground_truth.string() + " " + missing +
+  const CommandOutput result = Run("eval-traj " + ground_truth.string() + " " + missing +
                                           " --json " + json_file.string());
   EXPECT_NE(result.exit_code, 0);
   EXPECT_EQ(std::count(result.stderr_text.begin(), result.stderr_text.end(), '\n'), 1)
@@ -138,7 +105,7 @@ TEST_F(EvalTrajCliTest, MissingFileIsOneLineNamingIt) {
 }
 
 TEST_F(EvalTrajCliTest, UnknownRpeUnitIsRefused) {
-  const CommandOutput result = RunSegslam("eval-traj " + kTumDir + "/groundtruth.txt " + kTumDir +
+  const CommandOutput result = Run("eval-traj " + kTumDir + "/groundtruth.txt " + kTumDir +
                                           "/rgbdslam_estimate.txt --rpe-unit m");
   EXPECT_NE(result.exit_code, 0);
   EXPECT_NE(result.stderr_text.find("rpe-unit"), std::string::npos) << result.stderr_text;
