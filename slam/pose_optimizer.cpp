@@ -6,8 +6,8 @@
 #include <fmt/format.h>
 
 #include <cmath>
-#include <memory>
 #include <string>
+#include <utility>
 
 #include "core/error.h"
 #include "slam/reprojection_residuals.h"
@@ -91,25 +91,12 @@ PoseOptimizationResult OptimizePose(const Eigen::Isometry3d& T_cw_initial,
   result.inlier.assign(observations.size(), false);
   if (observations.empty()) return result;
 
-  // Cost functions and losses outlive the per-round problems, which only borrow them.
-  std::vector<std::unique_ptr<ceres::CostFunction>> costs;
-  costs.reserve(observations.size());
-  for (const PoseObservation& o : observations) {
-    if (IsStereo(o)) {
-      costs.push_back(std::make_unique<internal::PoseOnlyReprojectionCost<3>>(
-          model, Eigen::Vector3d(o.pixel.x(), o.pixel.y(), o.right_u), o.information, o.point_w));
-    } else {
-      costs.push_back(std::make_unique<internal::PoseOnlyReprojectionCost<2>>(
-          model, o.pixel, o.information, o.point_w));
-    }
-  }
   ceres::HuberLoss huber_mono(std::sqrt(options.chi2_mono));
   ceres::HuberLoss huber_stereo(std::sqrt(options.chi2_stereo));
   internal::PoseManifold manifold;
 
   ceres::Problem::Options problem_options;
   problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
 
   ceres::Solver::Options solver_options;
@@ -140,14 +127,21 @@ PoseOptimizationResult OptimizePose(const Eigen::Isometry3d& T_cw_initial,
     }
     const bool robust = round + 1 < options.rounds;
     const std::vector<bool> optimized_over = use;
-    ceres::Problem problem(problem_options);
-    problem.AddParameterBlock(pose, kPoseAmbientSize, &manifold);
+    std::vector<internal::PoseOnlyObservationsCost::Observation> terms;
+    terms.reserve(num_used);
     for (size_t i = 0; i < observations.size(); ++i) {
       if (!use[i]) continue;
-      ceres::LossFunction* loss = nullptr;
-      if (robust) loss = IsStereo(observations[i]) ? &huber_stereo : &huber_mono;
-      problem.AddResidualBlock(costs[i].get(), loss, pose);
+      const PoseObservation& o = observations[i];
+      const bool stereo = IsStereo(o);
+      const ceres::LossFunction* loss = nullptr;
+      if (robust) loss = stereo ? &huber_stereo : &huber_mono;
+      terms.push_back({o.point_w, Eigen::Vector3d(o.pixel.x(), o.pixel.y(), stereo ? o.right_u : 0.0),
+                       stereo, std::sqrt(o.information), loss});
     }
+    internal::PoseOnlyObservationsCost cost(model, std::move(terms));
+    ceres::Problem problem(problem_options);
+    problem.AddParameterBlock(pose, kPoseAmbientSize, &manifold);
+    problem.AddResidualBlock(&cost, nullptr, pose);
     ceres::Solver::Summary summary;
     ceres::Solve(solver_options, &problem, &summary);
     ++result.rounds_run;

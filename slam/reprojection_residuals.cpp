@@ -1,6 +1,7 @@
 #include "slam/reprojection_residuals.h"
 
 #include <algorithm>
+#include <utility>
 
 namespace segslam::slam::internal {
 namespace {
@@ -77,6 +78,80 @@ bool PoseManifold::Minus(const double* y, const double* x, double* y_minus_x) co
   Eigen::Map<Eigen::Vector3d> phi_out(y_minus_x + 3);
   rho = t_y - dq * t_x;
   phi_out = phi;
+  return true;
+}
+
+PoseOnlyObservationsCost::PoseOnlyObservationsCost(const StereoCameraModel& model,
+                                                   std::vector<Observation> observations)
+    : model_(model), observations_(std::move(observations)) {
+  int residuals = 1;  // the cost remainder
+  for (const Observation& o : observations_) residuals += o.stereo ? 3 : 2;
+  set_num_residuals(residuals);
+  mutable_parameter_block_sizes()->push_back(kPoseAmbientSize);
+}
+
+namespace {
+
+// One observation's rows of PoseOnlyObservationsCost: its residuals at `residuals` and,
+// when `jacobian` is not null, its Jacobian rows (row-major, kPoseAmbientSize columns).
+// Adds the loss's cost remainder to *remainder. False when p_c is not in front.
+template <int kResiduals>
+bool EvaluateObservation(const StereoCameraModel& model,
+                         const PoseOnlyObservationsCost::Observation& o,
+                         const Eigen::Vector3d& p_c, double* residuals, double* jacobian,
+                         double* remainder) {
+  const Eigen::Matrix<double, kResiduals, 1> measured = o.measured.head<kResiduals>();
+  Eigen::Matrix<double, kResiduals, 1> r;
+  if (jacobian == nullptr) {
+    if (!WhitenedReprojectionResidual<kResiduals>(model, measured, o.sqrt_information, p_c,
+                                                  r.data(), nullptr)) {
+      return false;
+    }
+    Eigen::Matrix<double, kResiduals, 0> no_columns;
+    *remainder += ApplyConcaveLoss(o.loss, &r, &no_columns);
+    std::copy_n(r.data(), kResiduals, residuals);
+    return true;
+  }
+  Eigen::Matrix<double, kResiduals, 3> d_r_d_pc;
+  if (!WhitenedReprojectionResidual<kResiduals>(model, measured, o.sqrt_information, p_c,
+                                                r.data(), &d_r_d_pc)) {
+    return false;
+  }
+  Eigen::Matrix<double, kResiduals, kPoseTangentSize> J = d_r_d_pc * PointTangentJacobian(p_c);
+  *remainder += ApplyConcaveLoss(o.loss, &r, &J);
+  std::copy_n(r.data(), kResiduals, residuals);
+  // See PoseManifold: the tangent derivative in the first six ambient columns.
+  Eigen::Map<Eigen::Matrix<double, kResiduals, kPoseAmbientSize, Eigen::RowMajor>> J_ambient(
+      jacobian);
+  J_ambient.template leftCols<kPoseTangentSize>() = J;
+  J_ambient.col(kPoseTangentSize).setZero();
+  return true;
+}
+
+}  // namespace
+
+bool PoseOnlyObservationsCost::Evaluate(double const* const* parameters, double* residuals,
+                                        double** jacobians) const {
+  const Eigen::Map<const Eigen::Vector3d> t(parameters[0]);
+  const Eigen::Matrix3d R =
+      Eigen::Map<const Eigen::Quaterniond>(parameters[0] + 3).toRotationMatrix();
+  double* jacobian = jacobians != nullptr ? jacobians[0] : nullptr;
+  double remainder = 0;
+  for (const Observation& o : observations_) {
+    const Eigen::Vector3d p_c = R * o.point_w + t;
+    const bool ok =
+        o.stereo ? EvaluateObservation<3>(model_, o, p_c, residuals, jacobian, &remainder)
+                 : EvaluateObservation<2>(model_, o, p_c, residuals, jacobian, &remainder);
+    if (!ok) return false;
+    const int rows = o.stereo ? 3 : 2;
+    residuals += rows;
+    if (jacobian != nullptr) jacobian += rows * kPoseAmbientSize;
+  }
+  // A zero Jacobian row on purpose: Ceres's corrector models a block's robust cost within
+  // a step as |r' + J' delta|^2 / 2 with the scaled r' and J', which misses this same
+  // remainder as a constant; only the model's change over a step matters to the solver.
+  *residuals = std::sqrt(remainder);
+  if (jacobian != nullptr) std::fill_n(jacobian, kPoseAmbientSize, 0.0);
   return true;
 }
 

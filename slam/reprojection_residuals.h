@@ -7,12 +7,15 @@
 #pragma once
 
 #include <ceres/cost_function.h>
+#include <ceres/loss_function.h>
 #include <ceres/manifold.h>
 #include <ceres/sized_cost_function.h>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "core/camera.h"
 
@@ -112,46 +115,61 @@ inline Eigen::Matrix<double, 3, 6> PointTangentJacobian(const Eigen::Vector3d& p
   return J;
 }
 
-// Residual of one observation of a fixed world point; parameter block: the pose.
-template <int kResiduals>
-class PoseOnlyReprojectionCost final
-    : public ceres::SizedCostFunction<kResiduals, kPoseAmbientSize> {
+// Every observation of one pose-only problem (a frame against fixed world points) as a
+// single residual block; parameter block: the pose.
+//
+// One block, because for 2- and 3-row blocks Ceres's per-block bookkeeping (scratch
+// space, validity checks, the loss corrector) costs several times the residual itself,
+// and tracking solves this problem two to four times a frame.
+//
+// Ceres applies a loss to a whole block, so each observation's loss is applied here, the
+// way Ceres would apply it to a block of its own (see ApplyConcaveLoss). The block's last
+// residual carries what that leaves out of the cost, so that the block's cost is the sum
+// of the observations' robust costs and the solver takes the same steps as with one block
+// per observation.
+class PoseOnlyObservationsCost final : public ceres::CostFunction {
  public:
-  PoseOnlyReprojectionCost(const StereoCameraModel& model,
-                           const Eigen::Matrix<double, kResiduals, 1>& measured, double information,
-                           const Eigen::Vector3d& point_w)
-      : model_(model),
-        measured_(measured),
-        sqrt_information_(std::sqrt(information)),
-        point_w_(point_w) {}
+  struct Observation {
+    Eigen::Vector3d point_w = Eigen::Vector3d::Zero();
+    Eigen::Vector3d measured = Eigen::Vector3d::Zero();  // (u, v, u_right)
+    bool stereo = false;  // 3 residuals (u, v, u_right); else 2 (u, v)
+    double sqrt_information = 1;
+    // Not owned; nullptr: the squared error. Must be concave (rho'' <= 0), as Ceres's
+    // robust losses are.
+    const ceres::LossFunction* loss = nullptr;
+  };
 
+  PoseOnlyObservationsCost(const StereoCameraModel& model, std::vector<Observation> observations);
+
+  // Rows: 2 or 3 per observation in order, then the cost remainder (see above), whose
+  // Jacobian row is zero. Fails (Ceres then rejects the step) when any point is not in
+  // front of the camera.
   bool Evaluate(double const* const* parameters, double* residuals,
-                double** jacobians) const override {
-    const Eigen::Map<const Eigen::Vector3d> t(parameters[0]);
-    const Eigen::Map<const Eigen::Quaterniond> q(parameters[0] + 3);
-    const Eigen::Vector3d p_c = q * point_w_ + t;
-    if (jacobians == nullptr || jacobians[0] == nullptr) {
-      return WhitenedReprojectionResidual<kResiduals>(model_, measured_, sqrt_information_, p_c,
-                                                      residuals, nullptr);
-    }
-    Eigen::Matrix<double, kResiduals, 3> d_r_d_pc;
-    if (!WhitenedReprojectionResidual<kResiduals>(model_, measured_, sqrt_information_, p_c,
-                                                  residuals, &d_r_d_pc)) {
-      return false;
-    }
-    Eigen::Map<Eigen::Matrix<double, kResiduals, kPoseAmbientSize, Eigen::RowMajor>> J(
-        jacobians[0]);
-    J.template leftCols<kPoseTangentSize>() = d_r_d_pc * PointTangentJacobian(p_c);
-    J.col(kPoseTangentSize).setZero();
-    return true;
-  }
+                double** jacobians) const override;
 
  private:
   StereoCameraModel model_;
-  Eigen::Matrix<double, kResiduals, 1> measured_;
-  double sqrt_information_;
-  Eigen::Vector3d point_w_;
+  std::vector<Observation> observations_;
 };
+
+// A residual r and its Jacobian J as Ceres's corrector turns them for a concave loss
+// (rho'' <= 0, where Ceres drops the curvature term of Triggs et al.'s correction): both
+// scaled by sqrt(rho'(s)), s = |r|^2. Then J^T r is the gradient of rho(s) / 2 and J^T J the Gauss-Newton
+// approximation Ceres uses. Returns rho(s) - |scaled r|^2 (= rho - rho' s >= 0 for a
+// concave loss), the part of the robust cost the scaled residual no longer carries.
+// A null loss changes nothing and returns 0. J may have 0 columns (residual only).
+template <int kResiduals, int kColumns>
+double ApplyConcaveLoss(const ceres::LossFunction* loss, Eigen::Matrix<double, kResiduals, 1>* r,
+                        Eigen::Matrix<double, kResiduals, kColumns>* J) {
+  if (loss == nullptr) return 0;
+  const double s = r->squaredNorm();
+  double rho[3];
+  loss->Evaluate(s, rho);
+  const double scale = std::sqrt(rho[1]);
+  *r *= scale;
+  *J *= scale;
+  return std::max(0.0, rho[0] - rho[1] * s);
+}
 
 // Residual of one observation; parameter blocks: the pose, then the world point.
 template <int kResiduals>

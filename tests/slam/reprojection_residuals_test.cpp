@@ -1,9 +1,13 @@
 // The analytic Jacobians of the shared Ceres terms, checked against central differences
-// taken through the manifold's own Plus (the only product Ceres uses), and the manifold's
-// Plus/Minus consistency.
+// taken through the manifold's own Plus (the only product Ceres uses), the robust cost of
+// the pose-only observations block, and the manifold's Plus/Minus consistency.
 #include "slam/reprojection_residuals.h"
 
+#include <ceres/loss_function.h>
 #include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
 
 namespace segslam::slam::internal {
 namespace {
@@ -35,6 +39,148 @@ TEST(ReprojectionResidualsTest, MinusInvertsPlus) {
   const Eigen::Vector3d expected = Eigen::AngleAxisd(phi.norm(), phi.normalized()) * p_c +
                                    Eigen::Vector3d(delta[0], delta[1], delta[2]);
   EXPECT_LT((PoseFromParameters(y) * point_w - expected).norm(), 1e-12);
+}
+
+// Two stereo and two monocular observations of points in front of TestPose(); the second
+// of each kind is far off (well outside a Huber loss of delta 2), the others close.
+std::vector<PoseOnlyObservationsCost::Observation> MixedObservations(const ceres::LossFunction* loss) {
+  const Eigen::Isometry3d T_cw = PoseFromParameters(TestPose().data());
+  const StereoCameraModel model = TestModel();
+  std::vector<PoseOnlyObservationsCost::Observation> observations;
+  const Eigen::Vector3d points_c[] = {{0.4, -0.3, 3.0}, {-1.0, 0.5, 5.0}, {0.2, 0.6, 2.0}, {1.1, -0.2, 7.0}};
+  const Eigen::Vector3d offsets[] = {{0.7, -0.4, 0.9}, {30, -12, 25}, {-0.5, 0.3, 0}, {-20, 9, 0}};
+  for (int i = 0; i < 4; ++i) {
+    const Eigen::Vector3d& p_c = points_c[i];
+    const double u = model.fx * p_c.x() / p_c.z() + model.cx;
+    const double v = model.fy * p_c.y() / p_c.z() + model.cy;
+    PoseOnlyObservationsCost::Observation o;
+    o.point_w = T_cw.inverse() * p_c;
+    o.stereo = i < 2;
+    o.measured = Eigen::Vector3d(u, v, u - model.bf / p_c.z()) + offsets[i];
+    o.sqrt_information = i % 2 == 0 ? 1.0 : 1 / 1.2;
+    o.loss = loss;
+    observations.push_back(o);
+  }
+  return observations;
+}
+
+// Half the block's squared norm: the cost Ceres minimises.
+double HalfSquaredNorm(const ceres::CostFunction& cost, const double* pose) {
+  Eigen::VectorXd r(cost.num_residuals());
+  const double* parameters[1] = {pose};
+  EXPECT_TRUE(cost.Evaluate(parameters, r.data(), nullptr));
+  return 0.5 * r.squaredNorm();
+}
+
+TEST(ReprojectionResidualsTest, ObservationsBlockWithoutLossStacksTheWhitenedResiduals) {
+  const auto observations = MixedObservations(nullptr);
+  const PoseOnlyObservationsCost cost(TestModel(), observations);
+  ASSERT_EQ(cost.num_residuals(), 3 + 3 + 2 + 2 + 1);
+  auto pose = TestPose();
+  Eigen::VectorXd r(cost.num_residuals());
+  Eigen::Matrix<double, Eigen::Dynamic, 7, Eigen::RowMajor> J(cost.num_residuals(), 7);
+  const double* parameters[1] = {pose.data()};
+  double* jacobians[1] = {J.data()};
+  ASSERT_TRUE(cost.Evaluate(parameters, r.data(), jacobians));
+  const Eigen::Isometry3d T_cw = PoseFromParameters(pose.data());
+  int row = 0;
+  for (const auto& o : observations) {
+    const int rows = o.stereo ? 3 : 2;
+    double expected[3];
+    if (o.stereo) {
+      ASSERT_TRUE(WhitenedReprojectionResidual<3>(TestModel(), o.measured, o.sqrt_information,
+                                                  T_cw * o.point_w, expected, nullptr));
+    } else {
+      ASSERT_TRUE(WhitenedReprojectionResidual<2>(TestModel(), Eigen::Vector2d(o.measured.head<2>()),
+                                                  o.sqrt_information, T_cw * o.point_w, expected, nullptr));
+    }
+    for (int k = 0; k < rows; ++k) EXPECT_NEAR(r[row + k], expected[k], 1e-12) << row + k;
+    row += rows;
+  }
+  EXPECT_EQ(r[row], 0.0);  // no loss, no remainder
+  EXPECT_EQ(J.row(row).norm(), 0.0);
+
+  // Each row's tangent Jacobian against central differences through the manifold.
+  const PoseManifold manifold;
+  const double h = 1e-6;
+  for (int j = 0; j < 6; ++j) {
+    double delta[6] = {0, 0, 0, 0, 0, 0};
+    double plus[7], minus[7];
+    delta[j] = h;
+    manifold.Plus(pose.data(), delta, plus);
+    delta[j] = -h;
+    manifold.Plus(pose.data(), delta, minus);
+    Eigen::VectorXd r_plus(cost.num_residuals()), r_minus(cost.num_residuals());
+    const double* at_plus[1] = {plus};
+    const double* at_minus[1] = {minus};
+    ASSERT_TRUE(cost.Evaluate(at_plus, r_plus.data(), nullptr));
+    ASSERT_TRUE(cost.Evaluate(at_minus, r_minus.data(), nullptr));
+    const Eigen::VectorXd numeric = (r_plus - r_minus) / (2 * h);
+    EXPECT_LT((numeric - J.col(j)).norm(), 1e-5 * (1 + numeric.norm())) << "column " << j;
+  }
+  EXPECT_EQ(J.col(6).norm(), 0.0);
+}
+
+// With a Huber loss the block must cost what one block per observation with the loss
+// would (the sum of rho / 2), and J^T r must be that cost's gradient: the two things the
+// solver's steps depend on besides the Gauss-Newton approximation of the Hessian.
+TEST(ReprojectionResidualsTest, ObservationsBlockWithHuberLossCostsTheSumOfRobustCosts) {
+  const ceres::HuberLoss huber(2.0);
+  const auto observations = MixedObservations(&huber);
+  const PoseOnlyObservationsCost cost(TestModel(), observations);
+  auto pose = TestPose();
+
+  auto robust_cost = [&](const double* at) {
+    const Eigen::Isometry3d T_cw = PoseFromParameters(at);
+    double total = 0;
+    for (const auto& o : observations) {
+      double r[3] = {0, 0, 0};
+      if (o.stereo) {
+        EXPECT_TRUE(WhitenedReprojectionResidual<3>(TestModel(), o.measured, o.sqrt_information,
+                                                    T_cw * o.point_w, r, nullptr));
+      } else {
+        EXPECT_TRUE(WhitenedReprojectionResidual<2>(TestModel(), Eigen::Vector2d(o.measured.head<2>()),
+                                                    o.sqrt_information, T_cw * o.point_w, r, nullptr));
+      }
+      const double s = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
+      // Huber with delta 2: s inside 4, else 2 * 2 * sqrt(s) - 4.
+      total += 0.5 * (s <= 4 ? s : 4 * std::sqrt(s) - 4);
+    }
+    return total;
+  };
+  const double expected = robust_cost(pose.data());
+  EXPECT_NEAR(HalfSquaredNorm(cost, pose.data()), expected, 1e-9 * expected);
+
+  Eigen::VectorXd r(cost.num_residuals());
+  Eigen::Matrix<double, Eigen::Dynamic, 7, Eigen::RowMajor> J(cost.num_residuals(), 7);
+  const double* parameters[1] = {pose.data()};
+  double* jacobians[1] = {J.data()};
+  ASSERT_TRUE(cost.Evaluate(parameters, r.data(), jacobians));
+  EXPECT_GT(r[cost.num_residuals() - 1], 0.0);  // the far observations leave a remainder
+  const Eigen::VectorXd gradient = J.leftCols<6>().transpose() * r;
+  const PoseManifold manifold;
+  const double h = 1e-6;
+  for (int j = 0; j < 6; ++j) {
+    double delta[6] = {0, 0, 0, 0, 0, 0};
+    double plus[7], minus[7];
+    delta[j] = h;
+    manifold.Plus(pose.data(), delta, plus);
+    delta[j] = -h;
+    manifold.Plus(pose.data(), delta, minus);
+    const double numeric = (robust_cost(plus) - robust_cost(minus)) / (2 * h);
+    EXPECT_NEAR(gradient[j], numeric, 1e-5 * (1 + std::abs(numeric))) << "column " << j;
+  }
+}
+
+TEST(ReprojectionResidualsTest, ObservationsBlockFailsWhenAPointIsBehindTheCamera) {
+  auto observations = MixedObservations(nullptr);
+  const Eigen::Isometry3d T_cw = PoseFromParameters(TestPose().data());
+  observations[2].point_w = T_cw.inverse() * Eigen::Vector3d(0.1, 0.1, -2.0);
+  const PoseOnlyObservationsCost cost(TestModel(), observations);
+  const auto pose = TestPose();
+  Eigen::VectorXd r(cost.num_residuals());
+  const double* parameters[1] = {pose.data()};
+  EXPECT_FALSE(cost.Evaluate(parameters, r.data(), nullptr));
 }
 
 // Tangent Jacobian as Ceres forms it: the cost's ambient Jacobian times PlusJacobian.
