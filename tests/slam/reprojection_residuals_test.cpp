@@ -6,7 +6,9 @@
 #include <ceres/loss_function.h>
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
+#include <utility>
 #include <vector>
 
 namespace segslam::slam::internal {
@@ -14,14 +16,27 @@ namespace {
 
 StereoCameraModel TestModel() { return {525, 520, 319.5, 239.5, 525 * 0.08}; }
 
-std::array<double, kPoseAmbientSize> TestPose() {
+using Pose = std::array<double, kPoseAmbientSize>;
+
+Pose TestPose() {
   Eigen::Isometry3d T_cw = Eigen::Isometry3d::Identity();
   T_cw.linear() =
       Eigen::AngleAxisd(0.4, Eigen::Vector3d(0.3, -1, 0.2).normalized()).toRotationMatrix();
   T_cw.translation() = Eigen::Vector3d(0.2, -0.1, 0.5);
-  std::array<double, kPoseAmbientSize> pose;
+  Pose pose;
   PoseToParameters(T_cw, pose.data());
   return pose;
+}
+
+// The pose moved by +h and by -h along tangent direction j, through the manifold's Plus.
+std::pair<Pose, Pose> TangentSteps(const Pose& pose, int j, double h) {
+  double delta[6] = {0, 0, 0, 0, 0, 0};
+  Pose plus, minus;
+  delta[j] = h;
+  PoseManifold().Plus(pose.data(), delta, plus.data());
+  delta[j] = -h;
+  PoseManifold().Plus(pose.data(), delta, minus.data());
+  return {plus, minus};
 }
 
 TEST(ReprojectionResidualsTest, MinusInvertsPlus) {
@@ -64,6 +79,19 @@ std::vector<PoseOnlyObservationsCost::Observation> MixedObservations(const ceres
   return observations;
 }
 
+// One observation's whitened residual at T_cw (third entry 0 for a monocular one).
+Eigen::Vector3d ObservationResidual(const PoseOnlyObservationsCost::Observation& o,
+                                    const Eigen::Isometry3d& T_cw) {
+  Eigen::Vector3d r = Eigen::Vector3d::Zero();
+  const bool in_front =
+      o.stereo ? WhitenedReprojectionResidual<3>(TestModel(), o.measured, o.sqrt_information,
+                                                 T_cw * o.point_w, r.data(), nullptr)
+               : WhitenedReprojectionResidual<2>(TestModel(), Eigen::Vector2d(o.measured.head<2>()),
+                                                 o.sqrt_information, T_cw * o.point_w, r.data(), nullptr);
+  EXPECT_TRUE(in_front);
+  return r;
+}
+
 // Half the block's squared norm: the cost Ceres minimises.
 double HalfSquaredNorm(const ceres::CostFunction& cost, const double* pose) {
   Eigen::VectorXd r(cost.num_residuals());
@@ -85,15 +113,8 @@ TEST(ReprojectionResidualsTest, ObservationsBlockWithoutLossStacksTheWhitenedRes
   const Eigen::Isometry3d T_cw = PoseFromParameters(pose.data());
   int row = 0;
   for (const auto& o : observations) {
+    const Eigen::Vector3d expected = ObservationResidual(o, T_cw);
     const int rows = o.stereo ? 3 : 2;
-    double expected[3];
-    if (o.stereo) {
-      ASSERT_TRUE(WhitenedReprojectionResidual<3>(TestModel(), o.measured, o.sqrt_information,
-                                                  T_cw * o.point_w, expected, nullptr));
-    } else {
-      ASSERT_TRUE(WhitenedReprojectionResidual<2>(TestModel(), Eigen::Vector2d(o.measured.head<2>()),
-                                                  o.sqrt_information, T_cw * o.point_w, expected, nullptr));
-    }
     for (int k = 0; k < rows; ++k) EXPECT_NEAR(r[row + k], expected[k], 1e-12) << row + k;
     row += rows;
   }
@@ -101,18 +122,12 @@ TEST(ReprojectionResidualsTest, ObservationsBlockWithoutLossStacksTheWhitenedRes
   EXPECT_EQ(J.row(row).norm(), 0.0);
 
   // Each row's tangent Jacobian against central differences through the manifold.
-  const PoseManifold manifold;
   const double h = 1e-6;
   for (int j = 0; j < 6; ++j) {
-    double delta[6] = {0, 0, 0, 0, 0, 0};
-    double plus[7], minus[7];
-    delta[j] = h;
-    manifold.Plus(pose.data(), delta, plus);
-    delta[j] = -h;
-    manifold.Plus(pose.data(), delta, minus);
+    const auto [plus, minus] = TangentSteps(pose, j, h);
     Eigen::VectorXd r_plus(cost.num_residuals()), r_minus(cost.num_residuals());
-    const double* at_plus[1] = {plus};
-    const double* at_minus[1] = {minus};
+    const double* at_plus[1] = {plus.data()};
+    const double* at_minus[1] = {minus.data()};
     ASSERT_TRUE(cost.Evaluate(at_plus, r_plus.data(), nullptr));
     ASSERT_TRUE(cost.Evaluate(at_minus, r_minus.data(), nullptr));
     const Eigen::VectorXd numeric = (r_plus - r_minus) / (2 * h);
@@ -134,15 +149,7 @@ TEST(ReprojectionResidualsTest, ObservationsBlockWithHuberLossCostsTheSumOfRobus
     const Eigen::Isometry3d T_cw = PoseFromParameters(at);
     double total = 0;
     for (const auto& o : observations) {
-      double r[3] = {0, 0, 0};
-      if (o.stereo) {
-        EXPECT_TRUE(WhitenedReprojectionResidual<3>(TestModel(), o.measured, o.sqrt_information,
-                                                    T_cw * o.point_w, r, nullptr));
-      } else {
-        EXPECT_TRUE(WhitenedReprojectionResidual<2>(TestModel(), Eigen::Vector2d(o.measured.head<2>()),
-                                                    o.sqrt_information, T_cw * o.point_w, r, nullptr));
-      }
-      const double s = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
+      const double s = ObservationResidual(o, T_cw).squaredNorm();
       // Huber with delta 2: s inside 4, else 2 * 2 * sqrt(s) - 4.
       total += 0.5 * (s <= 4 ? s : 4 * std::sqrt(s) - 4);
     }
@@ -158,16 +165,10 @@ TEST(ReprojectionResidualsTest, ObservationsBlockWithHuberLossCostsTheSumOfRobus
   ASSERT_TRUE(cost.Evaluate(parameters, r.data(), jacobians));
   EXPECT_GT(r[cost.num_residuals() - 1], 0.0);  // the far observations leave a remainder
   const Eigen::VectorXd gradient = J.leftCols<6>().transpose() * r;
-  const PoseManifold manifold;
   const double h = 1e-6;
   for (int j = 0; j < 6; ++j) {
-    double delta[6] = {0, 0, 0, 0, 0, 0};
-    double plus[7], minus[7];
-    delta[j] = h;
-    manifold.Plus(pose.data(), delta, plus);
-    delta[j] = -h;
-    manifold.Plus(pose.data(), delta, minus);
-    const double numeric = (robust_cost(plus) - robust_cost(minus)) / (2 * h);
+    const auto [plus, minus] = TangentSteps(pose, j, h);
+    const double numeric = (robust_cost(plus.data()) - robust_cost(minus.data())) / (2 * h);
     EXPECT_NEAR(gradient[j], numeric, 1e-5 * (1 + std::abs(numeric))) << "column " << j;
   }
 }
@@ -213,17 +214,11 @@ void ExpectPosePointJacobiansMatchDifferences(
     EXPECT_TRUE(cost.Evaluate(parameters, r.data(), nullptr));
     return r;
   };
-  const PoseManifold manifold;
   const double h = 1e-6;
   for (int j = 0; j < 6; ++j) {
-    double delta[6] = {0, 0, 0, 0, 0, 0};
-    double plus[7], minus[7];
-    delta[j] = h;
-    manifold.Plus(pose.data(), delta, plus);
-    delta[j] = -h;
-    manifold.Plus(pose.data(), delta, minus);
+    auto [plus, minus] = TangentSteps(pose, j, h);
     const Eigen::Matrix<double, kResiduals, 1> numeric =
-        (residual_at(plus, point.data()) - residual_at(minus, point.data())) / (2 * h);
+        (residual_at(plus.data(), point.data()) - residual_at(minus.data(), point.data())) / (2 * h);
     EXPECT_LT((numeric - analytic.col(j)).norm(), 1e-5 * (1 + numeric.norm()))
         << "pose column " << j;
   }
