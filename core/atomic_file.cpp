@@ -12,8 +12,6 @@
 
 namespace segslam {
 
-namespace {
-
 void WriteBytesAtomically(const std::filesystem::path& path, const void* data, size_t size) {
   // Same directory as the target, so the rename stays on one file system and is atomic;
   // the pid keeps two processes writing the same file from sharing a temporary.
@@ -39,8 +37,6 @@ void WriteBytesAtomically(const std::filesystem::path& path, const void* data, s
                               std::strerror(saved_errno));
   }
 }
-
-}  // namespace
 
 void WriteFileAtomically(const std::filesystem::path& path, const std::string& bytes) {
   WriteBytesAtomically(path, bytes.data(), bytes.size());

@@ -17,6 +17,9 @@ namespace segslam {
 // `path` and strerror) is thrown.
 void WriteFileAtomically(const std::filesystem::path& path, const std::string& bytes);
 
+// As WriteFileAtomically, for `size` bytes at `data`.
+void WriteBytesAtomically(const std::filesystem::path& path, const void* data, size_t size);
+
 // Encodes `image` with cv::imencode using the format given by the extension of `path`
 // (".png", ".jpg", ...) and `params` (cv::IMWRITE_* pairs), then writes it atomically.
 // Throws segslam::Error if encoding or writing fails.

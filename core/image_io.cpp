@@ -3,6 +3,11 @@
 #include <cctype>
 #include <cmath>
 #include <cstdint>
+#include <new>
+#include <string>
+#include <vector>
+
+#include <png.h>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -33,6 +38,56 @@ cv::Mat ReadUnchanged(const std::filesystem::path& path) {
 
 std::vector<int> PngParams(int compression) {
   return {cv::IMWRITE_PNG_COMPRESSION, compression};
+}
+
+void AppendPngBytes(png_structp png, png_bytep data, png_size_t size) {
+  auto* bytes = static_cast<std::vector<unsigned char>*>(png_get_io_ptr(png));
+  try {
+    bytes->insert(bytes->end(), data, data + size);
+  } catch (const std::bad_alloc&) {
+    png_error(png, "out of memory");  // a C++ exception must not cross libpng's C frames
+  }
+}
+
+[[noreturn]] void OnPngError(png_structp png, png_const_charp message) {
+  *static_cast<std::string*>(png_get_error_ptr(png)) = message;
+  png_longjmp(png, 1);
+}
+
+void IgnorePngWarning(png_structp, png_const_charp) {}
+
+// libpng reports errors by longjmp, so this frame holds nothing that needs destroying
+// beyond what it destroys itself. Returns false with libpng's message in *error.
+bool EncodeUnfilteredGray16Png(const cv::Mat& image, std::vector<unsigned char>* bytes,
+                               std::string* error) {
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, error, OnPngError,
+                                            IgnorePngWarning);
+  if (png == nullptr) return false;
+  png_infop info = png_create_info_struct(png);
+  if (info == nullptr) {
+    png_destroy_write_struct(&png, nullptr);
+    return false;
+  }
+  if (setjmp(png_jmpbuf(png))) {
+    png_destroy_write_struct(&png, &info);
+    return false;
+  }
+  png_set_write_fn(png, bytes, AppendPngBytes, nullptr);
+  png_set_compression_level(png, 1);
+  png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_NONE);
+  png_set_IHDR(png, info, static_cast<png_uint_32>(image.cols), static_cast<png_uint_32>(image.rows),
+               16, PNG_COLOR_TYPE_GRAY, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_BASE,
+               PNG_FILTER_TYPE_BASE);
+  png_write_info(png, info);
+#if __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+  png_set_swap(png);  // PNG stores 16-bit samples big-endian
+#endif
+  for (int row = 0; row < image.rows; ++row) {
+    png_write_row(png, const_cast<png_bytep>(image.ptr<unsigned char>(row)));
+  }
+  png_write_end(png, info);
+  png_destroy_write_struct(&png, &info);
+  return true;
 }
 
 bool IsPng(const std::filesystem::path& path) {
@@ -131,7 +186,26 @@ void WriteInstanceMask(const std::filesystem::path& path, const cv::Mat& ids) {
                               CvTypeName(ids.type()));
   }
   if (!IsPng(path)) throw FileError(path, "instance masks must be written as .png (lossless)");
-  WriteImageAtomically(path, ids, PngParams(1));
+  std::vector<unsigned char> png;
+  try {
+    png = EncodeInstanceMaskPng(ids);
+  } catch (const Error& e) {
+    throw FileError(path, e.what());
+  }
+  WriteBytesAtomically(path, png.data(), png.size());
+}
+
+std::vector<unsigned char> EncodeInstanceMaskPng(const cv::Mat& ids) {
+  if (ids.empty() || ids.type() != CV_16UC1) {
+    throw Error("instance mask to encode must be a non-empty CV_16UC1 image, got " +
+                CvTypeName(ids.type()));
+  }
+  std::vector<unsigned char> png;
+  std::string error = "libpng could not start";
+  if (!EncodeUnfilteredGray16Png(ids, &png, &error)) {
+    throw Error("cannot encode instance mask as PNG: " + error);
+  }
+  return png;
 }
 
 void WriteColorImage(const std::filesystem::path& path, const cv::Mat& bgr) {

@@ -33,8 +33,14 @@ void WriteDepthImage(const std::filesystem::path& path, const cv::Mat& depth_m,
 // CV_16U instance ids. Throws unless the file is a 16-bit single-channel image.
 cv::Mat ReadInstanceMask(const std::filesystem::path& path);
 
-// Writes a CV_16U id image losslessly (PNG, compression 1). Throws on other types.
+// Writes a CV_16U id image losslessly (EncodeInstanceMaskPng). Throws on other types.
 void WriteInstanceMask(const std::filesystem::path& path, const cv::Mat& ids);
+
+// PNG bytes of a CV_16U id image: zlib level 1 and no row filter. Label images are long
+// runs of one value, which zlib finds unfiltered; OpenCV 4.6 cannot turn the filters off
+// and libpng then tries all five on every row (measured on a 640x480 refined mask: 11 ms
+// through cv::imencode, 2.6 ms here, 1 % more bytes). Throws segslam::Error on other types.
+std::vector<unsigned char> EncodeInstanceMaskPng(const cv::Mat& ids);
 
 // Writes a CV_8UC3 BGR image (PNG compression 1 for .png; any imencode format by
 // extension). Throws on other types.

@@ -340,7 +340,7 @@ GenerateSummary GenerateDataset(const scenes::Scenario& scenario, const fs::path
         } else {
           EncodePng(frame->color_bgr, 1);
           EncodePng(frame->depth_m, 1);
-          EncodePng(frame->instance_ids, 1);
+          EncodeInstanceMaskPng(frame->instance_ids);
         }
       });
       T_wc_previous = T_wc;

@@ -4,6 +4,7 @@
 #include <fstream>
 #include <limits>
 #include <random>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
@@ -53,6 +54,16 @@ TEST_F(ImageIoTest, MaskRoundTripExact) {
   const cv::Mat back = ReadInstanceMask(path);
   ASSERT_EQ(back.type(), CV_16UC1);
   EXPECT_EQ(cv::norm(back, ids, cv::NORM_INF), 0.0);
+
+  // Rows of a view into a wider image are not contiguous; the encoder walks them one by one.
+  const cv::Mat view = ids(cv::Rect(3, 2, 31, 17));
+  ASSERT_FALSE(view.isContinuous());
+  const std::vector<unsigned char> png = EncodeInstanceMaskPng(view);
+  const cv::Mat decoded = cv::imdecode(png, cv::IMREAD_UNCHANGED);
+  ASSERT_EQ(decoded.type(), CV_16UC1);
+  ASSERT_EQ(decoded.size(), view.size());
+  EXPECT_EQ(cv::norm(decoded, view, cv::NORM_INF), 0.0);
+  EXPECT_THROW(EncodeInstanceMaskPng(cv::Mat(4, 4, CV_8UC1, cv::Scalar(1))), Error);
 }
 
 TEST_F(ImageIoTest, ColorRoundTripAndGrayConversion) {
