@@ -135,8 +135,8 @@ PoseOptimizationResult OptimizePose(const Eigen::Isometry3d& T_cw_initial,
       const bool stereo = IsStereo(o);
       const ceres::LossFunction* loss = nullptr;
       if (robust) loss = stereo ? &huber_stereo : &huber_mono;
-      terms.push_back({o.point_w, Eigen::Vector3d(o.pixel.x(), o.pixel.y(), stereo ? o.right_u : 0.0),
-                       stereo, std::sqrt(o.information), loss});
+      const Eigen::Vector3d measured(o.pixel.x(), o.pixel.y(), stereo ? o.right_u : 0.0);
+      terms.push_back({o.point_w, measured, stereo, std::sqrt(o.information), loss});
     }
     internal::PoseOnlyObservationsCost cost(model, std::move(terms));
     ceres::Problem problem(problem_options);

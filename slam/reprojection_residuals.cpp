@@ -102,20 +102,17 @@ bool EvaluateObservation(const StereoCameraModel& model,
                          double* remainder) {
   const Eigen::Matrix<double, kResiduals, 1> measured = o.measured.head<kResiduals>();
   Eigen::Matrix<double, kResiduals, 1> r;
+  Eigen::Matrix<double, kResiduals, 3> d_r_d_pc;
+  Eigen::Matrix<double, kResiduals, 3>* const wanted = jacobian != nullptr ? &d_r_d_pc : nullptr;
+  if (!WhitenedReprojectionResidual<kResiduals>(model, measured, o.sqrt_information, p_c,
+                                                r.data(), wanted)) {
+    return false;
+  }
   if (jacobian == nullptr) {
-    if (!WhitenedReprojectionResidual<kResiduals>(model, measured, o.sqrt_information, p_c,
-                                                  r.data(), nullptr)) {
-      return false;
-    }
     Eigen::Matrix<double, kResiduals, 0> no_columns;
     *remainder += ApplyConcaveLoss(o.loss, &r, &no_columns);
     std::copy_n(r.data(), kResiduals, residuals);
     return true;
-  }
-  Eigen::Matrix<double, kResiduals, 3> d_r_d_pc;
-  if (!WhitenedReprojectionResidual<kResiduals>(model, measured, o.sqrt_information, p_c,
-                                                r.data(), &d_r_d_pc)) {
-    return false;
   }
   Eigen::Matrix<double, kResiduals, kPoseTangentSize> J = d_r_d_pc * PointTangentJacobian(p_c);
   *remainder += ApplyConcaveLoss(o.loss, &r, &J);

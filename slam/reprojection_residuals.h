@@ -154,10 +154,11 @@ class PoseOnlyObservationsCost final : public ceres::CostFunction {
 
 // A residual r and its Jacobian J as Ceres's corrector turns them for a concave loss
 // (rho'' <= 0, where Ceres drops the curvature term of Triggs et al.'s correction): both
-// scaled by sqrt(rho'(s)), s = |r|^2. Then J^T r is the gradient of rho(s) / 2 and J^T J the Gauss-Newton
-// approximation Ceres uses. Returns rho(s) - |scaled r|^2 (= rho - rho' s >= 0 for a
-// concave loss), the part of the robust cost the scaled residual no longer carries.
-// A null loss changes nothing and returns 0. J may have 0 columns (residual only).
+// scaled by sqrt(rho'(s)), s = |r|^2. Then J^T r is the gradient of rho(s) / 2 and J^T J
+// the Gauss-Newton approximation Ceres uses. Returns rho(s) - |scaled r|^2
+// (= rho - rho' s >= 0 for a concave loss), the part of the robust cost the scaled
+// residual no longer carries. A null loss changes nothing and returns 0. J may have 0
+// columns (residual only).
 template <int kResiduals, int kColumns>
 double ApplyConcaveLoss(const ceres::LossFunction* loss, Eigen::Matrix<double, kResiduals, 1>* r,
                         Eigen::Matrix<double, kResiduals, kColumns>* J) {

@@ -58,11 +58,13 @@ TEST(ReprojectionResidualsTest, MinusInvertsPlus) {
 
 // Two stereo and two monocular observations of points in front of TestPose(); the second
 // of each kind is far off (well outside a Huber loss of delta 2), the others close.
-std::vector<PoseOnlyObservationsCost::Observation> MixedObservations(const ceres::LossFunction* loss) {
+std::vector<PoseOnlyObservationsCost::Observation> MixedObservations(
+    const ceres::LossFunction* loss) {
   const Eigen::Isometry3d T_cw = PoseFromParameters(TestPose().data());
   const StereoCameraModel model = TestModel();
   std::vector<PoseOnlyObservationsCost::Observation> observations;
-  const Eigen::Vector3d points_c[] = {{0.4, -0.3, 3.0}, {-1.0, 0.5, 5.0}, {0.2, 0.6, 2.0}, {1.1, -0.2, 7.0}};
+  const Eigen::Vector3d points_c[] = {
+      {0.4, -0.3, 3.0}, {-1.0, 0.5, 5.0}, {0.2, 0.6, 2.0}, {1.1, -0.2, 7.0}};
   const Eigen::Vector3d offsets[] = {{0.7, -0.4, 0.9}, {30, -12, 25}, {-0.5, 0.3, 0}, {-20, 9, 0}};
   for (int i = 0; i < 4; ++i) {
     const Eigen::Vector3d& p_c = points_c[i];
@@ -83,11 +85,12 @@ std::vector<PoseOnlyObservationsCost::Observation> MixedObservations(const ceres
 Eigen::Vector3d ObservationResidual(const PoseOnlyObservationsCost::Observation& o,
                                     const Eigen::Isometry3d& T_cw) {
   Eigen::Vector3d r = Eigen::Vector3d::Zero();
+  const Eigen::Vector3d p_c = T_cw * o.point_w;
   const bool in_front =
       o.stereo ? WhitenedReprojectionResidual<3>(TestModel(), o.measured, o.sqrt_information,
-                                                 T_cw * o.point_w, r.data(), nullptr)
+                                                 p_c, r.data(), nullptr)
                : WhitenedReprojectionResidual<2>(TestModel(), Eigen::Vector2d(o.measured.head<2>()),
-                                                 o.sqrt_information, T_cw * o.point_w, r.data(), nullptr);
+                                                 o.sqrt_information, p_c, r.data(), nullptr);
   EXPECT_TRUE(in_front);
   return r;
 }
@@ -218,7 +221,8 @@ void ExpectPosePointJacobiansMatchDifferences(
   for (int j = 0; j < 6; ++j) {
     auto [plus, minus] = TangentSteps(pose, j, h);
     const Eigen::Matrix<double, kResiduals, 1> numeric =
-        (residual_at(plus.data(), point.data()) - residual_at(minus.data(), point.data())) / (2 * h);
+        (residual_at(plus.data(), point.data()) - residual_at(minus.data(), point.data())) /
+        (2 * h);
     EXPECT_LT((numeric - analytic.col(j)).norm(), 1e-5 * (1 + numeric.norm()))
         << "pose column " << j;
   }
