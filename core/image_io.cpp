@@ -8,6 +8,7 @@
 #include <vector>
 
 #include <png.h>
+#include <zlib.h>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -36,9 +37,9 @@ cv::Mat ReadUnchanged(const std::filesystem::path& path) {
   return image;
 }
 
-std::vector<int> PngParams(int compression) {
-  return {cv::IMWRITE_PNG_COMPRESSION, compression};
-}
+// Row filters per kind of image, measured on rendered city frames (see image_io.h).
+constexpr int kDepthPngFilter = PNG_FILTER_SUB;
+constexpr int kColorPngFilter = PNG_FILTER_PAETH;
 
 void AppendPngBytes(png_structp png, png_bytep data, png_size_t size) {
   auto* bytes = static_cast<std::vector<unsigned char>*>(png_get_io_ptr(png));
@@ -56,10 +57,14 @@ void AppendPngBytes(png_structp png, png_bytep data, png_size_t size) {
 
 void IgnorePngWarning(png_structp, png_const_charp) {}
 
+// PNG bytes of a CV_8UC1, CV_8UC3 (BGR) or CV_16UC1 image at zlib level 1, every row with
+// the same `filter` (a PNG_FILTER_* flag) and zlib `strategy` (Z_DEFAULT_STRATEGY, ...).
+// OpenCV 4.6's imencode cannot choose the filter, and libpng then tries all five on every
+// row, which costs more than it saves on our images (the callers say what was measured).
 // libpng reports errors by longjmp, so this frame holds nothing that needs destroying
 // beyond what it destroys itself. Returns false with libpng's message in *error.
-bool EncodeUnfilteredGray16Png(const cv::Mat& image, std::vector<unsigned char>* bytes,
-                               std::string* error) {
+bool EncodePngRows(const cv::Mat& image, int filter, int strategy,
+                   std::vector<unsigned char>* bytes, std::string* error) {
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, error, OnPngError,
                                             IgnorePngWarning);
   if (png == nullptr) return false;
@@ -74,13 +79,17 @@ bool EncodeUnfilteredGray16Png(const cv::Mat& image, std::vector<unsigned char>*
   }
   png_set_write_fn(png, bytes, AppendPngBytes, nullptr);
   png_set_compression_level(png, 1);
-  png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_NONE);
+  png_set_compression_strategy(png, strategy);
+  png_set_filter(png, PNG_FILTER_TYPE_BASE, filter);
+  const bool sixteen_bit = image.depth() == CV_16U;
   png_set_IHDR(png, info, static_cast<png_uint_32>(image.cols),
-               static_cast<png_uint_32>(image.rows), 16, PNG_COLOR_TYPE_GRAY,
+               static_cast<png_uint_32>(image.rows), sixteen_bit ? 16 : 8,
+               image.channels() == 3 ? PNG_COLOR_TYPE_RGB : PNG_COLOR_TYPE_GRAY,
                PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_BASE, PNG_FILTER_TYPE_BASE);
   png_write_info(png, info);
+  if (image.channels() == 3) png_set_bgr(png);
 #if __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
-  png_set_swap(png);  // PNG stores 16-bit samples big-endian
+  if (sixteen_bit) png_set_swap(png);  // PNG stores 16-bit samples big-endian
 #endif
   for (int row = 0; row < image.rows; ++row) {
     png_write_row(png, const_cast<png_bytep>(image.ptr<unsigned char>(row)));
@@ -88,6 +97,26 @@ bool EncodeUnfilteredGray16Png(const cv::Mat& image, std::vector<unsigned char>*
   png_write_end(png, info);
   png_destroy_write_struct(&png, &info);
   return true;
+}
+
+std::vector<unsigned char> EncodePngOrThrow(const cv::Mat& image, int filter, int strategy,
+                                            const char* what) {
+  std::vector<unsigned char> png;
+  std::string error = "libpng could not start";
+  if (!EncodePngRows(image, filter, strategy, &png, &error)) {
+    throw Error(std::string("cannot encode ") + what + " as PNG: " + error);
+  }
+  return png;
+}
+
+// Rethrows an encoder's error as one that names the file being written.
+template <typename Encode>
+std::vector<unsigned char> EncodeFor(const std::filesystem::path& path, Encode encode) {
+  try {
+    return encode();
+  } catch (const Error& e) {
+    throw FileError(path, e.what());
+  }
 }
 
 bool IsPng(const std::filesystem::path& path) {
@@ -145,15 +174,21 @@ cv::Mat ReadDepthImage(const std::filesystem::path& path, double depth_factor) {
 
 void WriteDepthImage(const std::filesystem::path& path, const cv::Mat& depth_m,
                      double depth_factor) {
+  if (!IsPng(path)) throw FileError(path, "depth images must be written as .png (lossless)");
+  const std::vector<unsigned char> png =
+      EncodeFor(path, [&] { return EncodeDepthPng(depth_m, depth_factor); });
+  WriteBytesAtomically(path, png.data(), png.size());
+}
+
+std::vector<unsigned char> EncodeDepthPng(const cv::Mat& depth_m, double depth_factor) {
   if (!(depth_factor > 0) || !std::isfinite(depth_factor)) {
-    throw FileError(path, "depth factor must be positive, got " + std::to_string(depth_factor));
+    throw Error("depth factor must be positive, got " + std::to_string(depth_factor));
   }
   if (depth_m.empty() || depth_m.channels() != 1 ||
       (depth_m.depth() != CV_32F && depth_m.depth() != CV_64F)) {
-    throw FileError(path, "depth to write must be a non-empty CV_32FC1 or CV_64FC1 image, got " +
-                              CvTypeName(depth_m.type()));
+    throw Error("depth to write must be a non-empty CV_32FC1 or CV_64FC1 image, got " +
+                CvTypeName(depth_m.type()));
   }
-  if (!IsPng(path)) throw FileError(path, "depth images must be written as .png (lossless)");
   cv::Mat raw(depth_m.size(), CV_16UC1);
   for (int r = 0; r < depth_m.rows; ++r) {
     auto* out = raw.ptr<std::uint16_t>(r);
@@ -168,7 +203,7 @@ void WriteDepthImage(const std::filesystem::path& path, const cv::Mat& depth_m,
                    : 0;
     }
   }
-  WriteImageAtomically(path, raw, PngParams(1));
+  return EncodePngOrThrow(raw, kDepthPngFilter, Z_DEFAULT_STRATEGY, "depth");
 }
 
 cv::Mat ReadInstanceMask(const std::filesystem::path& path) {
@@ -181,54 +216,38 @@ cv::Mat ReadInstanceMask(const std::filesystem::path& path) {
 }
 
 void WriteInstanceMask(const std::filesystem::path& path, const cv::Mat& ids) {
-  if (ids.empty() || ids.type() != CV_16UC1) {
-    throw FileError(path, "instance mask to write must be a non-empty CV_16UC1 image, got " +
-                              CvTypeName(ids.type()));
-  }
   if (!IsPng(path)) throw FileError(path, "instance masks must be written as .png (lossless)");
-  std::vector<unsigned char> png;
-  try {
-    png = EncodeInstanceMaskPng(ids);
-  } catch (const Error& e) {
-    throw FileError(path, e.what());
-  }
+  const std::vector<unsigned char> png = EncodeFor(path, [&] { return EncodeInstanceMaskPng(ids); });
   WriteBytesAtomically(path, png.data(), png.size());
 }
 
 std::vector<unsigned char> EncodeInstanceMaskPng(const cv::Mat& ids) {
   if (ids.empty() || ids.type() != CV_16UC1) {
-    throw Error("instance mask to encode must be a non-empty CV_16UC1 image, got " +
+    throw Error("instance mask to write must be a non-empty CV_16UC1 image, got " +
                 CvTypeName(ids.type()));
   }
-  std::vector<unsigned char> png;
-  std::string error = "libpng could not start";
-  if (!EncodeUnfilteredGray16Png(ids, &png, &error)) {
-    throw Error("cannot encode instance mask as PNG: " + error);
-  }
-  return png;
+  return EncodePngOrThrow(ids, PNG_FILTER_NONE, Z_DEFAULT_STRATEGY, "instance mask");
 }
 
 void WriteColorImage(const std::filesystem::path& path, const cv::Mat& bgr) {
-  if (bgr.empty() || bgr.type() != CV_8UC3) {
-    throw FileError(path, "colour image to write must be a non-empty CV_8UC3 image, got " +
-                              CvTypeName(bgr.type()));
+  if (!IsPng(path)) {
+    if (bgr.empty() || bgr.type() != CV_8UC3) {
+      throw FileError(path, "colour image to write must be a non-empty CV_8UC3 image, got " +
+                                CvTypeName(bgr.type()));
+    }
+    WriteImageAtomically(path, bgr);
+    return;
   }
-  // Camera images carry sensor noise, which defeats LZ77 matching: Huffman coding alone
-  // is faster and, measured on rendered city frames, 10% smaller than zlib level 1.
-  std::vector<int> params;
-  if (IsPng(path)) {
-    params = {cv::IMWRITE_PNG_COMPRESSION, 1, cv::IMWRITE_PNG_STRATEGY,
-              cv::IMWRITE_PNG_STRATEGY_HUFFMAN_ONLY};
-  }
-  WriteImageAtomically(path, bgr, params);
+  const std::vector<unsigned char> png = EncodeFor(path, [&] { return EncodeColorPng(bgr); });
+  WriteBytesAtomically(path, png.data(), png.size());
 }
 
-std::vector<unsigned char> EncodePng(const cv::Mat& image, int compression) {
-  std::vector<unsigned char> buffer;
-  if (image.empty() || !cv::imencode(".png", image, buffer, PngParams(compression))) {
-    throw Error("cannot encode a " + CvTypeName(image.type()) + " image as PNG");
+std::vector<unsigned char> EncodeColorPng(const cv::Mat& bgr) {
+  if (bgr.empty() || bgr.type() != CV_8UC3) {
+    throw Error("colour image to write must be a non-empty CV_8UC3 image, got " +
+                CvTypeName(bgr.type()));
   }
-  return buffer;
+  return EncodePngOrThrow(bgr, kColorPngFilter, Z_HUFFMAN_ONLY, "colour image");
 }
 
 }  // namespace segslam

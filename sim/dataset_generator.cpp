@@ -338,8 +338,8 @@ GenerateSummary GenerateDataset(const scenes::Scenario& scenario, const fs::path
                           sequence_camera.depth_factor);
           WriteInstanceMask(pass_dir / "masks" / (name + ".png"), frame->instance_ids);
         } else {
-          EncodePng(frame->color_bgr, 1);
-          EncodePng(frame->depth_m, 1);
+          EncodeColorPng(frame->color_bgr);
+          EncodeDepthPng(frame->depth_m, sequence_camera.depth_factor);
           EncodeInstanceMaskPng(frame->instance_ids);
         }
       });

@@ -74,6 +74,11 @@ TEST_F(ImageIoTest, ColorRoundTripAndGrayConversion) {
   const cv::Mat back = ReadColorImage(dir() / "c.png");
   ASSERT_EQ(back.type(), CV_8UC3);
   EXPECT_EQ(cv::norm(back, bgr, cv::NORM_INF), 0.0);
+  // A view's rows are not contiguous; channels stay in BGR order.
+  const cv::Mat view = bgr(cv::Rect(1, 2, 9, 7));
+  const cv::Mat decoded = cv::imdecode(EncodeColorPng(view), cv::IMREAD_UNCHANGED);
+  ASSERT_EQ(decoded.type(), CV_8UC3);
+  EXPECT_EQ(cv::norm(decoded, view, cv::NORM_INF), 0.0);
 
   cv::Mat gray(10, 12, CV_8UC1, cv::Scalar(77));
   cv::imwrite((dir() / "g.png").string(), gray);
@@ -110,7 +115,7 @@ TEST_F(ImageIoTest, MissingAndCorruptFiles) {
   EXPECT_NE(message.find("none.png"), std::string::npos) << message;
   EXPECT_NE(message.find("does not exist"), std::string::npos) << message;
   // A truncated PNG.
-  const std::vector<unsigned char> png = EncodePng(cv::Mat(20, 20, CV_16UC1, cv::Scalar(9)), 1);
+  const std::vector<unsigned char> png = EncodeInstanceMaskPng(cv::Mat(20, 20, CV_16UC1, cv::Scalar(9)));
   const std::string half(png.begin(), png.begin() + png.size() / 2);
   std::ofstream(dir() / "bad.png", std::ios::binary) << half;
   message = ErrorMessage([&] { ReadDepthImage(dir() / "bad.png", 5000); });
