@@ -109,13 +109,20 @@ std::vector<unsigned char> EncodePngOrThrow(const cv::Mat& image, int filter, in
   return png;
 }
 
-// Rethrows an encoder's error as one that names the file being written.
-template <typename Encode>
-std::vector<unsigned char> EncodeFor(const std::filesystem::path& path, Encode encode) {
+// Runs `work` (encoding for `path`) and rethrows its error as one that names the file.
+template <typename Work>
+decltype(auto) NamingFile(const std::filesystem::path& path, Work work) {
   try {
-    return encode();
+    return work();
   } catch (const Error& e) {
     throw FileError(path, e.what());
+  }
+}
+
+void RequireImageType(const cv::Mat& image, int type, const char* what) {
+  if (image.empty() || image.type() != type) {
+    throw Error(std::string(what) + " to write must be a non-empty " + CvTypeName(type) +
+                " image, got " + CvTypeName(image.type()));
   }
 }
 
@@ -176,7 +183,7 @@ void WriteDepthImage(const std::filesystem::path& path, const cv::Mat& depth_m,
                      double depth_factor) {
   if (!IsPng(path)) throw FileError(path, "depth images must be written as .png (lossless)");
   const std::vector<unsigned char> png =
-      EncodeFor(path, [&] { return EncodeDepthPng(depth_m, depth_factor); });
+      NamingFile(path, [&] { return EncodeDepthPng(depth_m, depth_factor); });
   WriteBytesAtomically(path, png.data(), png.size());
 }
 
@@ -217,36 +224,28 @@ cv::Mat ReadInstanceMask(const std::filesystem::path& path) {
 
 void WriteInstanceMask(const std::filesystem::path& path, const cv::Mat& ids) {
   if (!IsPng(path)) throw FileError(path, "instance masks must be written as .png (lossless)");
-  const std::vector<unsigned char> png = EncodeFor(path, [&] { return EncodeInstanceMaskPng(ids); });
+  const std::vector<unsigned char> png =
+      NamingFile(path, [&] { return EncodeInstanceMaskPng(ids); });
   WriteBytesAtomically(path, png.data(), png.size());
 }
 
 std::vector<unsigned char> EncodeInstanceMaskPng(const cv::Mat& ids) {
-  if (ids.empty() || ids.type() != CV_16UC1) {
-    throw Error("instance mask to write must be a non-empty CV_16UC1 image, got " +
-                CvTypeName(ids.type()));
-  }
+  RequireImageType(ids, CV_16UC1, "instance mask");
   return EncodePngOrThrow(ids, PNG_FILTER_NONE, Z_DEFAULT_STRATEGY, "instance mask");
 }
 
 void WriteColorImage(const std::filesystem::path& path, const cv::Mat& bgr) {
   if (!IsPng(path)) {
-    if (bgr.empty() || bgr.type() != CV_8UC3) {
-      throw FileError(path, "colour image to write must be a non-empty CV_8UC3 image, got " +
-                                CvTypeName(bgr.type()));
-    }
+    NamingFile(path, [&] { RequireImageType(bgr, CV_8UC3, "colour image"); });
     WriteImageAtomically(path, bgr);
     return;
   }
-  const std::vector<unsigned char> png = EncodeFor(path, [&] { return EncodeColorPng(bgr); });
+  const std::vector<unsigned char> png = NamingFile(path, [&] { return EncodeColorPng(bgr); });
   WriteBytesAtomically(path, png.data(), png.size());
 }
 
 std::vector<unsigned char> EncodeColorPng(const cv::Mat& bgr) {
-  if (bgr.empty() || bgr.type() != CV_8UC3) {
-    throw Error("colour image to write must be a non-empty CV_8UC3 image, got " +
-                CvTypeName(bgr.type()));
-  }
+  RequireImageType(bgr, CV_8UC3, "colour image");
   return EncodePngOrThrow(bgr, kColorPngFilter, Z_HUFFMAN_ONLY, "colour image");
 }
 

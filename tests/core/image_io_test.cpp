@@ -115,7 +115,8 @@ TEST_F(ImageIoTest, MissingAndCorruptFiles) {
   EXPECT_NE(message.find("none.png"), std::string::npos) << message;
   EXPECT_NE(message.find("does not exist"), std::string::npos) << message;
   // A truncated PNG.
-  const std::vector<unsigned char> png = EncodeInstanceMaskPng(cv::Mat(20, 20, CV_16UC1, cv::Scalar(9)));
+  const std::vector<unsigned char> png =
+      EncodeInstanceMaskPng(cv::Mat(20, 20, CV_16UC1, cv::Scalar(9)));
   const std::string half(png.begin(), png.begin() + png.size() / 2);
   std::ofstream(dir() / "bad.png", std::ios::binary) << half;
   message = ErrorMessage([&] { ReadDepthImage(dir() / "bad.png", 5000); });
