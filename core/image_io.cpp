@@ -60,7 +60,7 @@ void IgnorePngWarning(png_structp, png_const_charp) {}
 // PNG bytes of a CV_8UC1, CV_8UC3 (BGR) or CV_16UC1 image at zlib level 1, every row with
 // the same `filter` (a PNG_FILTER_* flag) and zlib `strategy` (Z_DEFAULT_STRATEGY, ...).
 // OpenCV 4.6's imencode cannot choose the filter, and libpng then tries all five on every
-// row, which costs more than it saves on our images (the callers say what was measured).
+// row, which costs more than it saves on our images (image_io.h gives the measurements).
 // libpng reports errors by longjmp, so this frame holds nothing that needs destroying
 // beyond what it destroys itself. Returns false with libpng's message in *error.
 bool EncodePngRows(const cv::Mat& image, int filter, int strategy,
