@@ -109,6 +109,22 @@ std::vector<unsigned char> EncodePngOrThrow(const cv::Mat& image, int filter, in
   return png;
 }
 
+// round(depth * depth_factor) into `raw` (CV_16UC1 of depth_m's size). Out-of-range depth
+// is stored as 0, "no depth", rather than clipped, so a reader never sees a wrong distance.
+template <typename Depth>
+void StoreDepthRows(const cv::Mat& depth_m, double depth_factor, cv::Mat* raw) {
+  for (int r = 0; r < depth_m.rows; ++r) {
+    const Depth* in = depth_m.ptr<Depth>(r);
+    auto* out = raw->ptr<std::uint16_t>(r);
+    for (int c = 0; c < depth_m.cols; ++c) {
+      const double stored = std::round(static_cast<double>(in[c]) * depth_factor);
+      out[c] = (std::isfinite(stored) && stored > 0 && stored <= 65535)
+                   ? static_cast<std::uint16_t>(stored)
+                   : 0;
+    }
+  }
+}
+
 // Runs `work` (encoding for `path`) and rethrows its error as one that names the file.
 template <typename Work>
 decltype(auto) NamingFile(const std::filesystem::path& path, Work work) {
@@ -197,18 +213,10 @@ std::vector<unsigned char> EncodeDepthPng(const cv::Mat& depth_m, double depth_f
                 CvTypeName(depth_m.type()));
   }
   cv::Mat raw(depth_m.size(), CV_16UC1);
-  for (int r = 0; r < depth_m.rows; ++r) {
-    auto* out = raw.ptr<std::uint16_t>(r);
-    for (int c = 0; c < depth_m.cols; ++c) {
-      const double d = depth_m.depth() == CV_32F ? depth_m.at<float>(r, c)
-                                                 : depth_m.at<double>(r, c);
-      const double stored = std::round(d * depth_factor);
-      // Out-of-range depth is written as "no depth" rather than clipped, so a reader
-      // never sees a wrong distance.
-      out[c] = (std::isfinite(stored) && stored > 0 && stored <= 65535)
-                   ? static_cast<std::uint16_t>(stored)
-                   : 0;
-    }
+  if (depth_m.depth() == CV_32F) {
+    StoreDepthRows<float>(depth_m, depth_factor, &raw);
+  } else {
+    StoreDepthRows<double>(depth_m, depth_factor, &raw);
   }
   return EncodePngOrThrow(raw, kDepthPngFilter, Z_DEFAULT_STRATEGY, "depth");
 }
