@@ -39,7 +39,7 @@ cv::Mat ReadUnchanged(const std::filesystem::path& path) {
 
 // Row filters per kind of image, measured on rendered city frames (see image_io.h).
 constexpr int kDepthPngFilter = PNG_FILTER_SUB;
-constexpr int kColorPngFilter = PNG_FILTER_PAETH;
+constexpr int kColorPngFilter = PNG_FILTER_SUB;
 
 void AppendPngBytes(png_structp png, png_bytep data, png_size_t size) {
   auto* bytes = static_cast<std::vector<unsigned char>*>(png_get_io_ptr(png));

@@ -26,11 +26,21 @@ cv::Mat ReadDepthImage(const std::filesystem::path& path, double depth_factor);
 // The PNG writers below encode with libpng directly: zlib level 1 and one row filter
 // chosen per kind of image. OpenCV 4.6's imencode cannot choose the filter, and libpng
 // then tries all five on every row, which on our images costs more than it saves.
-// Measured on 640x480 frames of the default city, against cv::imencode at level 1 (with
-// Huffman-only coding for colour, as here), per frame:
+// Measured on 640x480 frames of the default city, against cv::imencode at level 1, per
+// frame:
 // - instance mask, no filter: 11 -> 2.6 ms, 1 % larger;
-// - depth, the Sub filter: 24.8 -> 13.5 ms, 0.6 % larger;
-// - colour, the Paeth filter: 28.9 -> 20.5 ms, 1.5 % larger.
+// - depth, the Sub filter: 24.8 -> 13.5 ms, 0.6 % larger. Huffman coding alone or RLE
+//   would encode the city's noisy depth faster but grow the office's smooth depth by 28
+//   to 36 %.
+// - colour, with Huffman coding alone: the Paeth filter took 28.9 -> 20.5 ms and was 1.5 %
+//   larger. Colour now uses the Sub filter, which is larger again but decodes much faster,
+//   and every run over a dataset decodes every colour frame. Paeth -> Sub, medians of
+//   `taskset -c 0 build/core_benchmarks --sequence DIR --benchmark_filter=Color
+//   --benchmark_repetitions=5`, the two builds alternated twice (ranges over the two):
+//   | frames                 | decode [ms]          | encode [ms]            | size   |
+//   | default city, pass 1   | 10.3-12.4 -> 6.1-7.5 | 17.3-21.2 -> 17.9-19.4 | +7.1 % |
+//   | office_walking_xyz     | 10.6-12.4 -> 6.0-7.5 | 19.4-23.1 -> 13.9-18.9 | +4.6 % |
+//   | 7-Scenes (real Kinect) | 9.3 -> 6.0-6.2       | 16.3-19.8 -> 13.1      | +9.9 % |
 // Each writer writes atomically and throws segslam::Error naming the file on a wrong type
 // or an empty image; the Encode* functions return the bytes and throw the same errors
 // without a file name.
