@@ -341,6 +341,11 @@ struct Tracker::Impl {
     return inliers;
   }
 
+  // The map point feature i was matched to, kept or rejected as an outlier.
+  MapPoint* MatchedPoint(size_t i) const {
+    return current.points[i] != nullptr ? current.points[i] : current.rejected[i];
+  }
+
   // The pose of the background alone: re-estimated from the coarse pose's matches (its
   // rejected ones too) of the features on no instance of a moveable class. Empty when
   // fewer than min_tracking_inliers of them fit.
@@ -348,8 +353,7 @@ struct Tracker::Impl {
     std::vector<int> feature_of;
     const std::vector<PoseObservation> observations = ObservationsOf(current, &feature_of, [&](size_t i) {
       const std::uint16_t id = current.instance[i];
-      if (id != 0 && moveable_ids.count(id) > 0) return static_cast<MapPoint*>(nullptr);
-      return current.points[i] != nullptr ? current.points[i] : current.rejected[i];
+      return id != 0 && moveable_ids.count(id) > 0 ? nullptr : MatchedPoint(i);
     });
     if (static_cast<int>(observations.size()) < options.min_tracking_inliers) return std::nullopt;
     PoseOptimizerOptions pose_options;
@@ -717,6 +721,142 @@ struct Tracker::Impl {
     return measurement;
   }
 
+  // ---------------------------------------------------------------- judgement
+  // JudgeInstances() in steps: which features lie on which instance; what this frame
+  // measures of each instance's motion; the verdict on that measurement; what the
+  // instance's recent frames add to it; and what a verdict keeps out of the pose and map.
+
+  // The instance id under each feature (into current.instance), and each instance's
+  // features.
+  std::map<std::uint16_t, std::vector<int>> LabelFeatures(const cv::Mat& ids) {
+    std::map<std::uint16_t, std::vector<int>> features_of;
+    for (size_t i = 0; i < current.features.size(); ++i) {
+      const cv::KeyPoint& kp = current.features.keypoints[i];
+      const int x = std::clamp(static_cast<int>(std::lround(kp.pt.x)), 0, camera.width - 1);
+      const int y = std::clamp(static_cast<int>(std::lround(kp.pt.y)), 0, camera.height - 1);
+      const std::uint16_t id = ids.at<std::uint16_t>(y, x);
+      current.instance[i] = id;
+      if (id != 0) features_of[id].push_back(static_cast<int>(i));
+    }
+    return features_of;
+  }
+
+  // Counts into judgement->num_points and num_moving_points how many of instance `id`'s
+  // `features` measure its motion, seen from T_wc, and how many of them moved; their
+  // displacements go to *evidence. Returns whether the measurement spans a full baseline.
+  bool MeasureInstanceMotion(std::uint16_t id, const std::vector<int>& features,
+                             const Eigen::Isometry3d& T_wc, bool trust_young_points,
+                             InstanceJudgement* judgement, MotionEvidence* evidence) const {
+    std::vector<int> unmatched;
+    std::vector<int> on_other_objects;  // matched to a point of another instance or background
+    for (int f : features) {
+      const MapPoint* point = MatchedPoint(static_cast<size_t>(f));
+      // A point made less than a baseline ago has not seen the object move far enough
+      // to tell (a walker covers 1-2 cm per frame, under the threshold): the instance's
+      // own features a baseline back measure it instead, or older points.
+      const bool too_young = !trust_young_points && point != nullptr && !point->fixed &&
+                             current.stamp_s - point->first_stamp_s < options.motion_baseline_s - 1e-6;
+      if (point == nullptr || point->bad || too_young) {
+        unmatched.push_back(f);
+        continue;
+      }
+      // A match to another object's point is an accidental descriptor match, not a
+      // measurement of this instance: a parked car, added or relocated since the map
+      // was made, matches the façade it now hides, and would be judged moving for as
+      // long as it stays there. Such matches are kept as a last resort (below).
+      if (point->instance_id != id) {
+        unmatched.push_back(f);
+        on_other_objects.push_back(f);
+        continue;
+      }
+      const int motion = MotionAgainstPoint(static_cast<size_t>(f), point, T_wc, evidence);
+      if (motion < 0) continue;
+      ++judgement->num_points;
+      judgement->num_moving_points += motion;
+    }
+    if (judgement->num_points >= options.min_points_to_judge) return true;
+    const HistoryMeasurement history = MotionAgainstHistory(id, unmatched, T_wc, judgement, evidence);
+    bool full_baseline = history.full_baseline;
+    // The last resort: the instance was there a moment ago with enough features, yet
+    // none of them can be found again and none of its own map points measures it. A
+    // walker does that (limbs and folds change their look within a baseline); a rigid
+    // car seen again is measured by its history. Then the matches to other objects
+    // decide. Without it, walking_xyz with ground-truth masks finds its walkers moving
+    // in 23 % of the frames they are seen in instead of 45 % (coverage, segslam eval).
+    if (judgement->num_points == 0 && history.found_instance) {
+      for (int f : on_other_objects) {
+        const size_t i = static_cast<size_t>(f);
+        const int motion = MotionAgainstPoint(i, MatchedPoint(i), T_wc, evidence);
+        if (motion < 0) continue;
+        ++judgement->num_points;
+        judgement->num_moving_points += motion;
+        full_baseline = true;  // the points are at least a baseline old
+      }
+    }
+    return full_baseline;
+  }
+
+  // The verdict on this frame's measurement alone: moving needs enough points, a share of
+  // them moving and a median displacement that agrees; "judged" (static or moving) also
+  // needs a full baseline to call an instance static.
+  void DecideMotion(bool full_baseline, const MotionEvidence& evidence, InstanceJudgement* judgement) const {
+    judgement->moving_share =
+        judgement->num_points > 0 ? double(judgement->num_moving_points) / judgement->num_points : 0;
+    const bool measured = judgement->num_points >= options.min_points_to_judge;
+    const bool evidence_enough_to_move =
+        judgement->moveable_class || judgement->num_points >= options.min_points_to_move_fixed_class;
+    judgement->moving = measured && evidence_enough_to_move &&
+                        judgement->moving_share >= options.moving_share_threshold && evidence.ConsensusMoves();
+    judgement->judged = measured && (judgement->moving || full_baseline);
+  }
+
+  // What the instance's recent frames add: an instance seen moving in enough frames in a
+  // row stays moving until a frame shows enough of it still, and the frames it is seen
+  // still in a row are counted (trust_young_points in JudgeInstances()).
+  void ApplyMotionMemory(bool full_baseline, InstanceJudgement* judgement, InstanceMotionMemory* memory) const {
+    if (judgement->moving) {
+      const bool in_a_row = current.stamp_s - memory->last_moving_stamp_s <= options.moving_memory_s + 1e-9;
+      memory->moving_frames = in_a_row ? memory->moving_frames + 1 : 1;
+      memory->last_moving_stamp_s = current.stamp_s;
+    }
+    const bool known_mover = memory->moving_frames >= options.moving_streak_frames &&
+                             current.stamp_s - memory->last_moving_stamp_s <= options.moving_memory_s + 1e-9;
+    // A small object cannot show min_points_to_clear_moving points: an eighth of its
+    // features is enough there.
+    const int points_to_clear = std::min(options.min_points_to_clear_moving,
+                                         std::max(options.min_points_to_judge, judgement->num_features / 8));
+    if (known_mover && !judgement->moving) {
+      if (judgement->num_points < points_to_clear) {
+        judgement->moving = true;
+        judgement->judged = true;
+      } else if (judgement->judged) {
+        memory->moving_frames = 0;  // cleared: it has stopped
+      }
+    }
+    if (judgement->moving) {
+      memory->static_frames = 0;
+    } else if (judgement->judged && full_baseline) {
+      ++memory->static_frames;
+    }
+  }
+
+  // A moveable object that cannot be judged yet is kept out of the pose and the map
+  // until it can: mapping a walking person because it was not measured is the error the
+  // paper exists to avoid.
+  void KeepOutOfPoseAndMap(const InstanceJudgement& judgement, const std::vector<int>& features) {
+    const bool exclude = judgement.moving || (judgement.moveable_class && !judgement.judged);
+    for (int f : features) current.excluded[static_cast<size_t>(f)] = exclude;
+    if (!judgement.moving) return;
+    // Whatever the map holds of a moving object is now in the wrong place.
+    for (const auto& owned : map->points()) {
+      if (owned->instance_id == judgement.id && !owned->bad && !owned->fixed) Map::MarkBad(owned.get());
+    }
+    for (int f : features) {
+      MapPoint* point = current.points[static_cast<size_t>(f)];
+      if (point != nullptr && !point->fixed && point->instance_id == judgement.id) Map::MarkBad(point);
+    }
+  }
+
   // ---------------------------------------------------------------- mapping
 
   bool NeedNewKeyframe() const {
@@ -1075,132 +1215,32 @@ std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& ins
   if (instances.ids.type() != CV_16U || instances.ids.size() != cv::Size(camera_.width, camera_.height)) {
     throw Error("frame " + std::to_string(s.current.index) + ": instance ids must be CV_16U of the camera's size");
   }
-  std::map<std::uint16_t, std::vector<int>> features_of;
-  for (size_t i = 0; i < s.current.features.size(); ++i) {
-    const cv::KeyPoint& kp = s.current.features.keypoints[i];
-    const int x = std::clamp(static_cast<int>(std::lround(kp.pt.x)), 0, camera_.width - 1);
-    const int y = std::clamp(static_cast<int>(std::lround(kp.pt.y)), 0, camera_.height - 1);
-    const std::uint16_t id = instances.ids.at<std::uint16_t>(y, x);
-    s.current.instance[i] = id;
-    if (id != 0) features_of[id].push_back(static_cast<int>(i));
-  }
+  const std::map<std::uint16_t, std::vector<int>> features_of = s.LabelFeatures(instances.ids);
   // Motion is measured against the background's pose where it can be had. The coarse
   // pose comes from every feature, and instances that fill the view pull it along: then
   // their own points agree with it whether they move or not (three walkers in front of
   // the camera were cleared that way, and entered the fine pose).
   const std::optional<Eigen::Isometry3d> background_T_cw =
       s.coarse_ok ? s.BackgroundPose(instances.moveable_ids) : std::nullopt;
-  std::vector<InstanceJudgement> judgements;
   const Eigen::Isometry3d T_wc = background_T_cw.value_or(s.current.T_cw).inverse();
+  std::vector<InstanceJudgement> judgements;
   for (const auto& [id, features] : features_of) {
     InstanceJudgement judgement;
     judgement.id = id;
     judgement.moveable_class = instances.moveable_ids.count(id) > 0;
     judgement.num_features = static_cast<int>(features.size());
-    std::vector<int> unmatched;
-    std::vector<int> on_other_objects;  // matched to a point of another instance or background
-    MotionEvidence evidence;
     InstanceMotionMemory& memory = s.motion_memory[id];
-    // Once an instance has been seen still over a full baseline, its young points serve
-    // again (a parked car stays parked); until then, or once it moves, they do not.
-    const bool trust_young_points = memory.static_frames >= options_.static_frames_to_trust_young_points;
     if (s.coarse_ok) {
-      for (int f : features) {
-        const size_t i = static_cast<size_t>(f);
-        const MapPoint* point = s.current.points[i] != nullptr ? s.current.points[i] : s.current.rejected[i];
-        // A point made less than a baseline ago has not seen the object move far enough
-        // to tell (a walker covers 1-2 cm per frame, under the threshold): the instance's
-        // own features a baseline back measure it instead, or older points.
-        const bool too_young = !trust_young_points && point != nullptr && !point->fixed &&
-                               s.current.stamp_s - point->first_stamp_s < options_.motion_baseline_s - 1e-6;
-        if (point == nullptr || point->bad || too_young) {
-          unmatched.push_back(f);
-          continue;
-        }
-        // A match to another object's point is an accidental descriptor match, not a
-        // measurement of this instance: a parked car, added or relocated since the map
-        // was made, matches the façade it now hides, and would be judged moving for as
-        // long as it stays there. Such matches are kept as a last resort (below).
-        if (point->instance_id != id) {
-          unmatched.push_back(f);
-          on_other_objects.push_back(f);
-          continue;
-        }
-        const int motion = s.MotionAgainstPoint(i, point, T_wc, &evidence);
-        if (motion < 0) continue;
-        ++judgement.num_points;
-        judgement.num_moving_points += motion;
-      }
-      bool full_baseline = true;
-      if (judgement.num_points < options_.min_points_to_judge) {
-        const Impl::HistoryMeasurement history = s.MotionAgainstHistory(id, unmatched, T_wc, &judgement, &evidence);
-        full_baseline = history.full_baseline;
-        // The last resort: the instance was there a moment ago with enough features, yet
-        // none of them can be found again and none of its own map points measures it. A
-        // walker does that (limbs and folds change their look within a baseline); a rigid
-        // car seen again is measured by its history. Then the matches to other objects
-        // decide. Without it, walking_xyz with ground-truth masks finds its walkers moving
-        // in 23 % of the frames they are seen in instead of 45 % (coverage, segslam eval).
-        if (judgement.num_points == 0 && history.found_instance) {
-          for (int f : on_other_objects) {
-            const size_t i = static_cast<size_t>(f);
-            const MapPoint* point = s.current.points[i] != nullptr ? s.current.points[i] : s.current.rejected[i];
-            const int motion = s.MotionAgainstPoint(i, point, T_wc, &evidence);
-            if (motion < 0) continue;
-            ++judgement.num_points;
-            judgement.num_moving_points += motion;
-            full_baseline = true;  // the points are at least a baseline old
-          }
-        }
-      }
-      judgement.moving_share =
-          judgement.num_points > 0 ? double(judgement.num_moving_points) / judgement.num_points : 0;
-      const bool measured = judgement.num_points >= options_.min_points_to_judge;
-      const bool evidence_enough_to_move =
-          judgement.moveable_class || judgement.num_points >= options_.min_points_to_move_fixed_class;
-      judgement.moving = measured && evidence_enough_to_move &&
-                         judgement.moving_share >= options_.moving_share_threshold && evidence.ConsensusMoves();
-      judgement.judged = measured && (judgement.moving || full_baseline);
-      if (judgement.moving) {
-        const bool in_a_row = s.current.stamp_s - memory.last_moving_stamp_s <= options_.moving_memory_s + 1e-9;
-        memory.moving_frames = in_a_row ? memory.moving_frames + 1 : 1;
-        memory.last_moving_stamp_s = s.current.stamp_s;
-      }
-      const bool known_mover = memory.moving_frames >= options_.moving_streak_frames &&
-                               s.current.stamp_s - memory.last_moving_stamp_s <= options_.moving_memory_s + 1e-9;
-      // A small object cannot show min_points_to_clear_moving points: an eighth of its
-      // features is enough there.
-      const int points_to_clear = std::min(options_.min_points_to_clear_moving,
-                                           std::max(options_.min_points_to_judge, judgement.num_features / 8));
-      if (known_mover && !judgement.moving) {
-        if (judgement.num_points < points_to_clear) {
-          judgement.moving = true;
-          judgement.judged = true;
-        } else if (judgement.judged) {
-          memory.moving_frames = 0;  // cleared: it has stopped
-        }
-      }
-      if (judgement.moving) {
-        memory.static_frames = 0;
-      } else if (judgement.judged && full_baseline) {
-        ++memory.static_frames;
-      }
+      // Once an instance has been seen still over a full baseline, its young points serve
+      // again (a parked car stays parked); until then, or once it moves, they do not.
+      const bool trust_young_points = memory.static_frames >= options_.static_frames_to_trust_young_points;
+      MotionEvidence evidence;
+      const bool full_baseline =
+          s.MeasureInstanceMotion(id, features, T_wc, trust_young_points, &judgement, &evidence);
+      s.DecideMotion(full_baseline, evidence, &judgement);
+      s.ApplyMotionMemory(full_baseline, &judgement, &memory);
     }
-    // A moveable object that cannot be judged yet is kept out of the pose and the map
-    // until it can: mapping a walking person because it was not measured is the error
-    // the paper exists to avoid.
-    const bool exclude = judgement.moving || (judgement.moveable_class && !judgement.judged);
-    for (int f : features) s.current.excluded[static_cast<size_t>(f)] = exclude;
-    if (judgement.moving) {
-      // Whatever the map holds of a moving object is now in the wrong place.
-      for (const auto& owned : map_->points()) {
-        if (owned->instance_id == id && !owned->bad && !owned->fixed) Map::MarkBad(owned.get());
-      }
-      for (int f : features) {
-        MapPoint* point = s.current.points[static_cast<size_t>(f)];
-        if (point != nullptr && !point->fixed && point->instance_id == id) Map::MarkBad(point);
-      }
-    }
+    s.KeepOutOfPoseAndMap(judgement, features);
     judgements.push_back(judgement);
   }
   s.judged = true;
