@@ -5,6 +5,7 @@
 #include <cstring>
 #include <limits>
 #include <numeric>
+#include <optional>
 #include <sstream>
 
 #include <opencv2/imgproc.hpp>
@@ -414,6 +415,124 @@ int IntersectionWithLabel(const ProjectionWorkspace& ws, size_t i, const cv::Mat
   return count;
 }
 
+// A projected previous region p matched to a current region c.
+struct RegionMatch {
+  double cost = 0;  // S of the paper's eq. 2
+  int p = -1;
+  int c = -1;
+  int intersection = 0;  // pixels the two regions share
+};
+
+// One-to-one matches between the projected previous regions and the current regions,
+// indexed by current region (nullopt: unmatched). Of the pairs whose S (paper eq. 2) is
+// under max_match_cost, the lowest S is taken first (ties: lower indices first, so the
+// result is deterministic).
+std::vector<std::optional<RegionMatch>> MatchRegions(const RefinerOptions& options,
+                                                     const PinholeCamera& camera,
+                                                     const FrameSegmentation& previous,
+                                                     const ProjectionWorkspace& ws,
+                                                     const FrameSegmentation& current,
+                                                     const std::vector<RegionStats>& cur_stats) {
+  const std::vector<RegionStats>& prev_stats = ws.regions;
+  std::vector<RegionMatch> candidates;
+  const double diagonal = std::hypot(camera.width, camera.height);
+  for (size_t p = 0; p < previous.instances.size(); ++p) {
+    if (prev_stats[p].area_px < std::max(1, options.min_matched_area_px)) continue;
+    for (size_t c = 0; c < current.instances.size(); ++c) {
+      if (cur_stats[c].area_px == 0) continue;
+      if (options.require_same_category &&
+          previous.instances[p].category_id != current.instances[c].category_id) {
+        continue;
+      }
+      const int inter =
+          (prev_stats[p].bbox & cur_stats[c].bbox).empty()
+              ? 0
+              : IntersectionWithLabel(ws, p, current.instances[c].mask, cur_stats[c].bbox);
+      const double sum = prev_stats[p].area_px + cur_stats[c].area_px;
+      const double xor_area = sum - 2.0 * inter;
+      const double dist = std::hypot(prev_stats[p].cx - cur_stats[c].cx,
+                                     prev_stats[p].cy - cur_stats[c].cy) / diagonal;
+      const double cost =
+          options.w_barycenter * dist + options.w_shape * std::sqrt(xor_area / sum);
+      if (cost < options.max_match_cost) {
+        candidates.push_back({cost, static_cast<int>(p), static_cast<int>(c), inter});
+      }
+    }
+  }
+  std::sort(candidates.begin(), candidates.end(), [](const RegionMatch& a, const RegionMatch& b) {
+    if (a.cost != b.cost) return a.cost < b.cost;
+    return a.p != b.p ? a.p < b.p : a.c < b.c;
+  });
+  std::vector<std::optional<RegionMatch>> match_of_cur(current.instances.size());
+  std::vector<bool> previous_taken(previous.instances.size(), false);
+  for (const RegionMatch& k : candidates) {
+    if (match_of_cur[k.c] || previous_taken[k.p]) continue;
+    match_of_cur[k.c] = k;
+    previous_taken[k.p] = true;
+  }
+  return match_of_cur;
+}
+
+// Algorithm 1 for a matched pair: *instance (a copy of the current region) keeps its
+// mask, or takes the projected region's where the current one has lost part of it
+// (shrink, or repair of a missing part), or is trimmed to the projection; it takes the
+// previous track id and at least a share of the previous score. *decision records why.
+void RefineMatchedRegion(const RefinerOptions& options, const PinholeCamera& camera,
+                         const ProjectionWorkspace& ws, const RegionMatch& match,
+                         const RegionStats& cur_stats, const InstanceMask& previous,
+                         InstanceMask* instance, RegionDecision* decision) {
+  const size_t p = static_cast<size_t>(match.p);
+  const RegionStats& prev_stats = ws.regions[p];
+  // Ratios up to the boundary tolerance: a pixel of one region counts as confirmed by
+  // the other when it lies within boundary_tolerance_px of it.
+  const int tol = options.boundary_tolerance_px;
+  double ra_c = static_cast<double>(match.intersection) / cur_stats.area_px;
+  double ra_p = static_cast<double>(match.intersection) / prev_stats.area_px;
+  cv::Mat projected_mask, trimmed;
+  cv::Rect roi;
+  if (tol > 0) {
+    projected_mask = RegionMask(ws, p);
+    roi = cur_stats.bbox | prev_stats.bbox;
+    roi.x -= tol;
+    roi.y -= tol;
+    roi.width += 2 * tol;
+    roi.height += 2 * tol;
+    roi &= cv::Rect(0, 0, camera.width, camera.height);
+    const cv::Mat mc = instance->mask(roi) != 0;
+    const cv::Mat mp = projected_mask(roi) != 0;
+    const cv::Mat kernel =
+        cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * tol + 1, 2 * tol + 1));
+    cv::Mat mc_wide, mp_wide;
+    cv::dilate(mc, mc_wide, kernel);
+    cv::dilate(mp, mp_wide, kernel);
+    trimmed = mc & mp_wide;
+    ra_c = static_cast<double>(cv::countNonZero(trimmed)) / cur_stats.area_px;
+    ra_p = static_cast<double>(cv::countNonZero(mp & mc_wide)) / prev_stats.area_px;
+  }
+  const bool shrink = ra_p - ra_c > options.replace_min_ratio_gap;  // paper: gap 0
+  const bool repair = options.repair_missing_parts &&
+                      ra_c >= options.repair_min_current_inside &&
+                      ra_p < options.repair_max_projected_covered;
+  const bool replace = shrink || repair;
+  decision->kind = replace ? RegionDecision::Kind::kReplaced : RegionDecision::Kind::kKept;
+  decision->previous_index = match.p;
+  decision->cost = match.cost;
+  decision->ratio_current = ra_c;
+  decision->ratio_projected = ra_p;
+  decision->projected_area_px = prev_stats.area_px;
+  instance->track_id = previous.track_id;
+  if (shrink && !repair && options.trim_instead_of_replace && !trimmed.empty()) {
+    cv::Mat mask(instance->mask.size(), CV_8U, cv::Scalar(0));
+    mask(roi).setTo(1, trimmed);
+    instance->mask = mask;
+  } else if (replace) {
+    instance->mask = projected_mask.empty() ? RegionMask(ws, p) : projected_mask;
+  }
+  instance->score = std::max(
+      instance->score,
+      static_cast<float>(options.matched_previous_score_weight * previous.score));
+}
+
 }  // namespace
 
 std::vector<ProjectedRegion> ProjectRegions(
@@ -515,57 +634,20 @@ RefinementResult SegmentationRefiner::Refine(const RefinerInput& in) {
     cur_stats[c] = Measure(current.instances[c].mask);
   }
 
-  // Candidate pairs under the threshold (paper eq. 2).
-  struct Candidate {
-    double cost;
-    int p, c, intersection;
-  };
-  std::vector<Candidate> candidates;
-  const double diagonal = std::hypot(in.camera.width, in.camera.height);
-  for (size_t p = 0; p < n_prev; ++p) {
-    if (prev_stats[p].area_px < std::max(1, options_.min_matched_area_px)) continue;
-    for (size_t c = 0; c < n_cur; ++c) {
-      if (cur_stats[c].area_px == 0) continue;
-      if (options_.require_same_category &&
-          previous.instances[p].category_id != current.instances[c].category_id) {
-        continue;
-      }
-      const int inter =
-          (prev_stats[p].bbox & cur_stats[c].bbox).empty()
-              ? 0
-              : IntersectionWithLabel(ws, p, current.instances[c].mask, cur_stats[c].bbox);
-      const double sum = prev_stats[p].area_px + cur_stats[c].area_px;
-      const double xor_area = sum - 2.0 * inter;
-      const double dist = std::hypot(prev_stats[p].cx - cur_stats[c].cx,
-                                     prev_stats[p].cy - cur_stats[c].cy) / diagonal;
-      const double cost =
-          options_.w_barycenter * dist + options_.w_shape * std::sqrt(xor_area / sum);
-      if (cost < options_.max_match_cost) {
-        candidates.push_back({cost, static_cast<int>(p), static_cast<int>(c), inter});
-      }
-    }
-  }
-  // One-to-one, greedily by increasing S (ties: lower indices first, deterministic).
-  std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
-    if (a.cost != b.cost) return a.cost < b.cost;
-    return a.p != b.p ? a.p < b.p : a.c < b.c;
-  });
-  std::vector<int> match_of_cur(n_cur, -1), match_of_prev(n_prev, -1);
-  std::vector<const Candidate*> cand_of_cur(n_cur, nullptr);
-  for (const Candidate& k : candidates) {
-    if (match_of_cur[k.c] >= 0 || match_of_prev[k.p] >= 0) continue;
-    match_of_cur[k.c] = k.p;
-    match_of_prev[k.p] = k.c;
-    cand_of_cur[k.c] = &k;
-  }
+  const std::vector<std::optional<RegionMatch>> match_of_cur =
+      MatchRegions(options_, in.camera, previous, ws, current, cur_stats);
+  std::vector<bool> previous_matched(n_prev, false);
 
   // Current regions: keep or replace (Algorithm 1), or new.
   for (size_t c = 0; c < n_cur; ++c) {
     InstanceMask instance = current.instances[c];
     RegionDecision d;
     d.current_index = static_cast<int>(c);
-    const int p = match_of_cur[c];
-    if (p < 0) {
+    if (const std::optional<RegionMatch>& match = match_of_cur[c]) {
+      previous_matched[static_cast<size_t>(match->p)] = true;
+      RefineMatchedRegion(options_, in.camera, ws, *match, cur_stats[c],
+                          previous.instances[static_cast<size_t>(match->p)], &instance, &d);
+    } else {
       d.kind = RegionDecision::Kind::kNew;
       instance.track_id = FreshId();
       instance.score = static_cast<float>(instance.score * options_.new_region_score_factor);
@@ -575,56 +657,6 @@ RefinementResult SegmentationRefiner::Refine(const RefinerInput& in) {
         result.decisions.push_back(d);
         continue;
       }
-    } else {
-      const Candidate& k = *cand_of_cur[c];
-      // Ratios up to the boundary tolerance: a pixel of one region counts as confirmed
-      // by the other when it lies within boundary_tolerance_px of it.
-      const int tol = options_.boundary_tolerance_px;
-      double ra_c = static_cast<double>(k.intersection) / cur_stats[c].area_px;
-      double ra_p = static_cast<double>(k.intersection) / prev_stats[p].area_px;
-      cv::Mat projected_mask, trimmed;
-      cv::Rect roi;
-      if (tol > 0) {
-        projected_mask = RegionMask(ws, p);
-        roi = cur_stats[c].bbox | prev_stats[p].bbox;
-        roi.x -= tol;
-        roi.y -= tol;
-        roi.width += 2 * tol;
-        roi.height += 2 * tol;
-        roi &= cv::Rect(0, 0, in.camera.width, in.camera.height);
-        const cv::Mat mc = current.instances[c].mask(roi) != 0;
-        const cv::Mat mp = projected_mask(roi) != 0;
-        const cv::Mat kernel = cv::getStructuringElement(
-            cv::MORPH_ELLIPSE, cv::Size(2 * tol + 1, 2 * tol + 1));
-        cv::Mat mc_wide, mp_wide;
-        cv::dilate(mc, mc_wide, kernel);
-        cv::dilate(mp, mp_wide, kernel);
-        trimmed = mc & mp_wide;
-        ra_c = static_cast<double>(cv::countNonZero(trimmed)) / cur_stats[c].area_px;
-        ra_p = static_cast<double>(cv::countNonZero(mp & mc_wide)) / prev_stats[p].area_px;
-      }
-      const bool shrink = ra_p - ra_c > options_.replace_min_ratio_gap;  // paper: gap 0
-      const bool repair = options_.repair_missing_parts &&
-                          ra_c >= options_.repair_min_current_inside &&
-                          ra_p < options_.repair_max_projected_covered;
-      const bool replace = shrink || repair;
-      d.kind = replace ? RegionDecision::Kind::kReplaced : RegionDecision::Kind::kKept;
-      d.previous_index = p;
-      d.cost = k.cost;
-      d.ratio_current = ra_c;
-      d.ratio_projected = ra_p;
-      d.projected_area_px = prev_stats[p].area_px;
-      instance.track_id = previous.instances[p].track_id;
-      if (shrink && !repair && options_.trim_instead_of_replace && !trimmed.empty()) {
-        cv::Mat mask(current.instances[c].mask.size(), CV_8U, cv::Scalar(0));
-        mask(roi).setTo(1, trimmed);
-        instance.mask = mask;
-      } else if (replace) {
-        instance.mask = projected_mask.empty() ? RegionMask(ws, p) : projected_mask;
-      }
-      instance.score = std::max(
-          instance.score, static_cast<float>(options_.matched_previous_score_weight *
-                                             previous.instances[p].score));
     }
     d.track_id = instance.track_id;
     result.decisions.push_back(d);
@@ -634,7 +666,7 @@ RefinementResult SegmentationRefiner::Refine(const RefinerInput& in) {
   // Unmatched projections: add back missed instances.
   const bool count_rule_holds = n_prev > n_cur;
   for (size_t p = 0; p < n_prev; ++p) {
-    if (match_of_prev[p] >= 0) continue;
+    if (previous_matched[p]) continue;
     const InstanceMask& prev = previous.instances[p];
     RegionDecision d;
     d.previous_index = static_cast<int>(p);
