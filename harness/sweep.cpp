@@ -298,19 +298,12 @@ Shard Shard::Parse(const std::string& text) {
   return shard;
 }
 
-std::string MergeSweep(const std::vector<fs::path>& inputs, const fs::path& out_dir) {
-  if (inputs.empty()) throw Error("sweep merge: no sweep folders given");
-  const fs::path grid_file = inputs.front() / "sweep.json";
-  const nlohmann::json sweep = ReadJsonFile(grid_file);
-  const SweepGrid grid = SweepGrid::FromJson(sweep.value("grid", nlohmann::json::object()), grid_file.string());
-  for (std::size_t i = 1; i < inputs.size(); ++i) {
-    const fs::path other = inputs[i] / "sweep.json";
-    if (ReadJsonFile(other).value("grid", nlohmann::json::object()) != sweep["grid"]) {
-      throw Error("sweep merge: " + other.string() + " holds another grid than " + grid_file.string());
-    }
-  }
+namespace {
 
-  // Every point's results, from the first input that has them.
+// Every point's results.json, from the first input that has it, copied into out_dir's
+// points/ unless it is already there. Throws naming the points no input has.
+std::vector<nlohmann::json> GatherPointResults(const SweepGrid& grid, const std::vector<fs::path>& inputs,
+                                               const fs::path& out_dir) {
   const int points = grid.PointCount();
   std::vector<nlohmann::json> results(points);
   std::vector<std::string> missing;
@@ -336,88 +329,110 @@ std::string MergeSweep(const std::vector<fs::path>& inputs, const fs::path& out_
                             inputs.size() == 1 ? inputs.front().string() : "any of the folders given",
                             Join(missing, ", ")));
   }
+  return results;
+}
 
-  // The modes, in the paper's order, that ran at any point.
+// What the points ran: the modes, in the paper's order, and whether there was a pass 2.
+struct SweepContents {
   std::vector<std::string> modes;
+  bool two_pass = false;
+  bool has_plain = false;
+  bool has_mutual = false;
+};
+
+SweepContents ContentsOf(const std::vector<nlohmann::json>& results) {
+  SweepContents contents;
   for (const std::string& mode : kModeOrder) {
     for (const nlohmann::json& r : results) {
       const nlohmann::json ran = r.contains("bench") ? r["bench"].value("modes", nlohmann::json::array())
                                                      : nlohmann::json::array();
       if (std::find(ran.begin(), ran.end(), mode) != ran.end()) {
-        modes.push_back(mode);
+        contents.modes.push_back(mode);
         break;
       }
     }
   }
-  const bool two_pass = std::any_of(results.begin(), results.end(),
-                                    [](const nlohmann::json& r) { return r.contains("summary") && r["summary"].contains("pass2"); });
+  contents.two_pass = std::any_of(results.begin(), results.end(), [](const nlohmann::json& r) {
+    return r.contains("summary") && r["summary"].contains("pass2");
+  });
+  const auto ran = [&](const char* mode) {
+    return std::find(contents.modes.begin(), contents.modes.end(), mode) != contents.modes.end();
+  };
+  contents.has_plain = ran("plain");
+  contents.has_mutual = ran("mutual");
+  return contents;
+}
 
-  // The table: a row per point, a column group per mode.
+// A row per point, a column group per mode.
+ReportTable SweepTable(const SweepGrid& grid, const std::vector<nlohmann::json>& results,
+                       const SweepContents& contents) {
+  const bool two_pass = contents.two_pass;
+  const bool ratios = contents.has_plain && contents.has_mutual;
   ReportTable table;
   table.caption = "Median over repeats [min, max]; pass 2 scored in the pass-1 map frame";
   for (const SweepAxis& axis : grid.axes) table.header.push_back(axis.key);
-  for (const std::string& mode : modes) {
+  for (const std::string& mode : contents.modes) {
     table.header.push_back(mode + " ATE p1 [m]");
     if (two_pass) {
       table.header.push_back(mode + " ATE p2 [m]");
       table.header.push_back(mode + " localized p2");
     }
   }
-  const bool has_plain = std::find(modes.begin(), modes.end(), "plain") != modes.end();
-  const bool has_mutual = std::find(modes.begin(), modes.end(), "mutual") != modes.end();
-  if (has_plain && has_mutual) {
+  if (ratios) {
     table.header.push_back("mutual/plain ATE p1");
     if (two_pass) table.header.push_back("mutual/plain ATE p2");
   }
-  if (has_mutual) {
+  if (contents.has_mutual) {
     // What the density axes mean to SLAM: how much of what it saw moved (run_evaluation.h).
     table.header.push_back("moving features p1, mean");
     table.header.push_back("mutual mIoU raw -> refined");
   }
-  nlohmann::json merged = {{"grid", grid.ToJson()}, {"points", nlohmann::json::array()}};
-  for (int p = 0; p < points; ++p) {
+  for (int p = 0; p < grid.PointCount(); ++p) {
     const nlohmann::json& r = results[p];
     std::vector<std::string> row;
     for (const std::string& assignment : grid.PointAssignments(p)) row.push_back(assignment.substr(assignment.find('=') + 1));
-    for (const std::string& mode : modes) {
+    for (const std::string& mode : contents.modes) {
       row.push_back(Spread(ValueOf(r, "pass1", mode, "ate_rmse_m"), "{:.4f}"));
       if (two_pass) {
         row.push_back(Spread(ValueOf(r, "pass2", mode, "ate_rmse_m"), "{:.4f}"));
         row.push_back(Cell(100 * ValueOf(r, "pass2", mode, "localized_share").median, "{:.1f}%"));
       }
     }
-    if (has_plain && has_mutual) {
+    if (ratios) {
       for (const std::string pass : {"pass1", "pass2"}) {
         if (pass == std::string("pass2") && !two_pass) continue;
         row.push_back(Cell(ValueOf(r, pass, "mutual", "ate_rmse_m").median / ValueOf(r, pass, "plain", "ate_rmse_m").median,
                            "{:.2f}"));
       }
     }
-    if (has_mutual) {
+    if (contents.has_mutual) {
       row.push_back(Cell(100 * ValueOf(r, "pass1", "mutual", "moving_feature_share_mean").median, "{:.1f}%"));
       row.push_back(Cell(100 * ValueOf(r, "pass1", "mutual", "seg_raw_miou").median, "{:.1f}") + " -> " +
                     Cell(100 * ValueOf(r, "pass1", "mutual", "seg_refined_miou").median, "{:.1f}"));
     }
     table.rows.push_back(row);
+  }
+  return table;
+}
+
+// sweep_results.json: the grid, and per point its assignments, folder, code version and
+// summary.
+nlohmann::json MergedResults(const SweepGrid& grid, const std::vector<nlohmann::json>& results) {
+  nlohmann::json merged = {{"grid", grid.ToJson()}, {"points", nlohmann::json::array()}};
+  for (int p = 0; p < grid.PointCount(); ++p) {
+    const nlohmann::json& r = results[p];
     merged["points"].push_back({{"assignments", grid.PointAssignments(p)},
                                 {"folder", "points/" + grid.PointName(p)},
                                 {"code_version", r.value("code_version", "")},
                                 {"summary", r.value("summary", nlohmann::json::object())}});
   }
+  return merged;
+}
 
-  // The plots: against the first axis; other axes' values become more series.
-  std::vector<PlotSpec> plots = {{"sweep_ate_pass1.png", "pass1", "ate_rmse_m", "ATE, pass 1", "ATE RMSE [m]", {}}};
-  if (two_pass) {
-    plots.push_back({"sweep_ate_pass2.png", "pass2", "ate_rmse_m", "ATE, pass 2 on the pass-1 map", "ATE RMSE [m]", {}});
-    plots.push_back({"sweep_localized_pass2.png", "pass2", "localized_share", "Relocalization: pass-2 frames localized",
-                     "share of frames", {}});
-  }
-  if (has_mutual) {
-    plots.push_back({"sweep_moving_features_pass1.png", "pass1", "moving_feature_share_mean",
-                     "Moving features (mutual), pass 1", "mean share of features on movers", {"mutual"}});
-    plots.push_back({"sweep_miou_pass1.png", "pass1", "seg_refined_miou", "Segmentation in the loop (mutual), pass 1",
-                     "mIoU", {"mutual"}});
-  }
+// The report's title and what it states of the sweep: files, grid, code versions,
+// machine, segmenters and seeds.
+ReportDocument SweepDocument(const nlohmann::json& sweep, const SweepGrid& grid,
+                             const std::vector<nlohmann::json>& results) {
   const std::string scenario_name = results.front().value("scenario", std::string("?"));
   ReportDocument document("segslam sweep: " + (sweep.contains("name") ? sweep["name"].get<std::string>() + " (" +
                                                                             scenario_name + ")"
@@ -449,45 +464,83 @@ std::string MergeSweep(const std::vector<fs::path>& inputs, const fs::path& out_
                                             segmenters.size() == 1 ? segmenters.front()
                                                                    : Join(segmenters, ", ") + " (per point)",
                                             bench.value("seed", 0)));
+  return document;
+}
+
+// The plots against the first axis (other axes' values become more series), written to
+// out_dir/figures/ and added to the document.
+void AddSweepPlots(const SweepGrid& grid, const std::vector<nlohmann::json>& results,
+                   const SweepContents& contents, const fs::path& out_dir, ReportDocument* document) {
+  std::vector<PlotSpec> plots = {{"sweep_ate_pass1.png", "pass1", "ate_rmse_m", "ATE, pass 1", "ATE RMSE [m]", {}}};
+  if (contents.two_pass) {
+    plots.push_back({"sweep_ate_pass2.png", "pass2", "ate_rmse_m", "ATE, pass 2 on the pass-1 map", "ATE RMSE [m]", {}});
+    plots.push_back({"sweep_localized_pass2.png", "pass2", "localized_share", "Relocalization: pass-2 frames localized",
+                     "share of frames", {}});
+  }
+  if (contents.has_mutual) {
+    plots.push_back({"sweep_moving_features_pass1.png", "pass1", "moving_feature_share_mean",
+                     "Moving features (mutual), pass 1", "mean share of features on movers", {"mutual"}});
+    plots.push_back({"sweep_miou_pass1.png", "pass1", "seg_refined_miou", "Segmentation in the loop (mutual), pass 1",
+                     "mIoU", {"mutual"}});
+  }
+  const SweepAxis& axis = grid.axes.front();
+  document->AddHeading("Against " + axis.key, 2);
+  const AxisPlacement placement = PlaceAxisOnPlot(axis);
+  const int per_value = grid.PointCount() / static_cast<int>(axis.values.size());
+  fs::create_directories(out_dir / "figures");
+  for (const PlotSpec& spec : plots) {
+    std::vector<PlotSeries> series;
+    const std::vector<std::string>& plot_modes = spec.modes.empty() ? contents.modes : spec.modes;
+    for (const std::string& mode : plot_modes) {
+      for (int rest = 0; rest < per_value; ++rest) {
+        PlotSeries s;
+        s.name = mode;
+        if (per_value > 1) {
+          const std::vector<std::string> assignments = grid.PointAssignments(rest);
+          s.name += " (" + Join({assignments.begin() + 1, assignments.end()}, ", ") + ")";
+        }
+        for (const std::size_t v : placement.value_index) {
+          const PointValue value = ValueOf(results[static_cast<int>(v) * per_value + rest], spec.pass, mode, spec.metric);
+          s.y.push_back(value.median);
+          s.y_min.push_back(value.min);
+          s.y_max.push_back(value.max);
+        }
+        series.push_back(s);
+      }
+    }
+    LinePlotOptions options;
+    options.title = spec.title;
+    options.x_label = axis.key + (placement.numeric ? "" : " (" + Join(axis.values, ", ") + ")");
+    options.y_label = spec.y_label;
+    WriteFigure(out_dir / "figures" / spec.file, DrawLinePlot(options, placement.x, series).image);
+    document->AddImage("figures/" + spec.file,
+                       spec.title + " against " + axis.key + " (median over repeats, bars from min to max)");
+  }
+}
+
+}  // namespace
+
+std::string MergeSweep(const std::vector<fs::path>& inputs, const fs::path& out_dir) {
+  if (inputs.empty()) throw Error("sweep merge: no sweep folders given");
+  const fs::path grid_file = inputs.front() / "sweep.json";
+  const nlohmann::json sweep = ReadJsonFile(grid_file);
+  const SweepGrid grid = SweepGrid::FromJson(sweep.value("grid", nlohmann::json::object()), grid_file.string());
+  for (std::size_t i = 1; i < inputs.size(); ++i) {
+    const fs::path other = inputs[i] / "sweep.json";
+    if (ReadJsonFile(other).value("grid", nlohmann::json::object()) != sweep["grid"]) {
+      throw Error("sweep merge: " + other.string() + " holds another grid than " + grid_file.string());
+    }
+  }
+  const std::vector<nlohmann::json> results = GatherPointResults(grid, inputs, out_dir);
+  const SweepContents contents = ContentsOf(results);
+  const ReportTable table = SweepTable(grid, results, contents);
+
+  ReportDocument document = SweepDocument(sweep, grid, results);
   document.AddHeading("Results per point", 2);
   document.AddTable(table);
   document.AddParagraph("Each point's own report (tables, trajectories) is in points/<point>/report.html.");
-
-  if (!grid.axes.empty()) {
-    document.AddHeading("Against " + grid.axes.front().key, 2);
-    const AxisPlacement placement = PlaceAxisOnPlot(grid.axes.front());
-    const int per_value = points / static_cast<int>(grid.axes.front().values.size());
-    fs::create_directories(out_dir / "figures");
-    for (const PlotSpec& spec : plots) {
-      std::vector<PlotSeries> series;
-      const std::vector<std::string>& plot_modes = spec.modes.empty() ? modes : spec.modes;
-      for (const std::string& mode : plot_modes) {
-        for (int rest = 0; rest < per_value; ++rest) {
-          PlotSeries s;
-          s.name = mode;
-          if (per_value > 1) {
-            const std::vector<std::string> assignments = grid.PointAssignments(rest);
-            s.name += " (" + Join({assignments.begin() + 1, assignments.end()}, ", ") + ")";
-          }
-          for (const std::size_t v : placement.value_index) {
-            const PointValue value = ValueOf(results[static_cast<int>(v) * per_value + rest], spec.pass, mode, spec.metric);
-            s.y.push_back(value.median);
-            s.y_min.push_back(value.min);
-            s.y_max.push_back(value.max);
-          }
-          series.push_back(s);
-        }
-      }
-      LinePlotOptions options;
-      options.title = spec.title;
-      options.x_label = grid.axes.front().key + (placement.numeric ? "" : " (" + Join(grid.axes.front().values, ", ") + ")");
-      options.y_label = spec.y_label;
-      WriteFigure(out_dir / "figures" / spec.file, DrawLinePlot(options, placement.x, series).image);
-      document.AddImage("figures/" + spec.file, spec.title + " against " + grid.axes.front().key +
-                                                    " (median over repeats, bars from min to max)");
-    }
-  }
-  WriteFileAtomically(out_dir / "sweep_results.json", merged.dump(2) + "\n");
+  if (!grid.axes.empty()) AddSweepPlots(grid, results, contents, out_dir, &document);
+  WriteFileAtomically(out_dir / "sweep_results.json", MergedResults(grid, results).dump(2) + "\n");
   document.Write(out_dir);
 
   std::ostringstream text;
