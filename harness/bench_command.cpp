@@ -9,6 +9,7 @@
 #include "harness/machine.h"
 #include "harness/progress_bar.h"
 #include "harness/slam_runner.h"
+#include "slam/tracker.h"
 #include "scenes/scenario.h"
 #include "seg/simulated_segmenter.h"
 #include "sim/dataset_generator.h"
@@ -216,7 +217,7 @@ void AddBenchCommand(CLI::App& app, std::function<int()>* action) {
                    "A TUM-layout sequence (with masks/ for mutual and mask-moveable, unless --masks names a folder)")
       ->required();
   slam->add_option("--mode", slam_args->mode, "plain, mask-moveable or mutual")
-      ->check(CLI::IsMember({"plain", "mask-moveable", "mutual"}))
+      ->check(CLI::IsMember(slam::SlamModeNames()))
       ->capture_default_str();
   slam->add_option("--frames", slam_args->frames, "Only the first N frames (0 = all)")
       ->check(CLI::NonNegativeNumber);

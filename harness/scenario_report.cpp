@@ -30,7 +30,6 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-const std::vector<std::string> kKnownModes = {"plain", "mask-moveable", "mutual"};
 const std::vector<std::string> kPasses = {"pass1", "pass2"};
 
 bool Contains(const std::vector<std::string>& list, const std::string& value) {
@@ -435,7 +434,7 @@ std::string BenchSettings::Check() const {
   if (modes.empty()) return "modes: at least one of plain, mask-moveable, mutual";
   std::set<std::string> seen;
   for (const std::string& mode : modes) {
-    if (!Contains(kKnownModes, mode)) return "modes: unknown mode '" + mode + "' (plain, mask-moveable or mutual)";
+    if (!Contains(slam::SlamModeNames(), mode)) return "modes: unknown mode '" + mode + "' (plain, mask-moveable or mutual)";
     if (!seen.insert(mode).second) return "modes: '" + mode + "' twice";
   }
   if (repeats < 1) return fmt::format("repeats: must be >= 1 (got {})", repeats);
@@ -586,6 +585,21 @@ std::vector<ExpectationResult> CheckExpectations(const std::vector<Expectation>&
     results.push_back(result);
   }
   return results;
+}
+
+std::vector<std::string> ModesThatRan(const std::vector<nlohmann::json>& results) {
+  std::vector<std::string> modes;
+  for (const std::string& mode : slam::SlamModeNames()) {
+    for (const nlohmann::json& r : results) {
+      const nlohmann::json ran = r.contains("bench") ? r["bench"].value("modes", nlohmann::json::array())
+                                                     : nlohmann::json::array();
+      if (std::find(ran.begin(), ran.end(), mode) != ran.end()) {
+        modes.push_back(mode);
+        break;
+      }
+    }
+  }
+  return modes;
 }
 
 nlohmann::json ScenarioReport::ToJson() const {

@@ -27,12 +27,13 @@
 
 #include "harness/report_document.h"
 #include "harness/run_evaluation.h"
+#include "slam/tracker.h"
 
 namespace segslam::harness {
 
 // The scenario's `bench:` section; command-line options override it.
 struct BenchSettings {
-  std::vector<std::string> modes = {"plain", "mask-moveable", "mutual"};
+  std::vector<std::string> modes = slam::SlamModeNames();
   int repeats = 10;  // runs per mode, differing by the segmenter's seed (the paper: 10)
   // Simulated segmenter preset (seg/simulated_segmenter.h) for mask-moveable and mutual;
   // "gt" uses the dataset's ground-truth masks (then every mode is deterministic).
@@ -135,6 +136,10 @@ struct ScenarioReport {
   // One testcase per expectation.
   std::string ToJUnitXml() const;
 };
+
+// The modes, in the paper's order (slam::SlamModeNames), that ran in any of these
+// results.json documents (ScenarioReport::ToJson); one without a bench section ran none.
+std::vector<std::string> ModesThatRan(const std::vector<nlohmann::json>& results);
 
 // Draws the report's figures into report.report_dir/figures/: top views of both passes
 // (as the paper's Fig. 4), and for one frame of pass 1 of the mutual run of median ATE

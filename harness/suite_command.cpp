@@ -37,7 +37,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::vector<std::string> kModeOrder = {"plain", "mask-moveable", "mutual"};
 const std::set<std::string> kTables = {"ate", "segmentation", "relocalization"};
 
 struct SuiteEntry {
@@ -173,16 +172,7 @@ int RunSuite(const SuiteArgs& args) {
     results.push_back(report.ToJson());
   }
 
-  std::vector<std::string> modes;
-  for (const std::string& mode : kModeOrder) {
-    for (const nlohmann::json& r : results) {
-      const auto ran = r["bench"]["modes"];
-      if (std::find(ran.begin(), ran.end(), mode) != ran.end()) {
-        modes.push_back(mode);
-        break;
-      }
-    }
-  }
+  const std::vector<std::string> modes = ModesThatRan(results);
   const bool ratio = std::count(modes.begin(), modes.end(), "plain") && std::count(modes.begin(), modes.end(), "mutual");
   ReportDocument document("segslam suite: " + suite.name);
   document.AddMetadata("suite file", args.suite_file);

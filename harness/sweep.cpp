@@ -19,6 +19,7 @@
 #include "harness/report_document.h"
 #include "harness/machine.h"
 #include "harness/report_figures.h"
+#include "harness/scenario_report.h"
 
 namespace segslam::harness {
 
@@ -27,7 +28,6 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-const std::vector<std::string> kModeOrder = {"plain", "mask-moveable", "mutual"};
 
 std::vector<std::string> SplitValues(const std::string& text) {
   if (!text.empty() && text.front() == '[') return {text};
@@ -342,16 +342,7 @@ struct SweepContents {
 
 SweepContents ContentsOf(const std::vector<nlohmann::json>& results) {
   SweepContents contents;
-  for (const std::string& mode : kModeOrder) {
-    for (const nlohmann::json& r : results) {
-      const nlohmann::json ran = r.contains("bench") ? r["bench"].value("modes", nlohmann::json::array())
-                                                     : nlohmann::json::array();
-      if (std::find(ran.begin(), ran.end(), mode) != ran.end()) {
-        contents.modes.push_back(mode);
-        break;
-      }
-    }
-  }
+  contents.modes = ModesThatRan(results);
   contents.two_pass = std::any_of(results.begin(), results.end(), [](const nlohmann::json& r) {
     return r.contains("summary") && r["summary"].contains("pass2");
   });

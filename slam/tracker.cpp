@@ -29,6 +29,12 @@ std::string ToString(SlamMode mode) {
   return "?";
 }
 
+const std::vector<std::string>& SlamModeNames() {
+  static const std::vector<std::string> names = {
+      ToString(SlamMode::kPlain), ToString(SlamMode::kMaskMoveable), ToString(SlamMode::kMutual)};
+  return names;
+}
+
 SlamMode ParseSlamMode(const std::string& name) {
   if (name == "plain") return SlamMode::kPlain;
   if (name == "mask-moveable") return SlamMode::kMaskMoveable;

@@ -51,6 +51,8 @@ enum class SlamMode {
   kMutual,        // the paper: moving/static judgement per instance
 };
 std::string ToString(SlamMode mode);
+// Every mode's name, the baselines first: the order of the paper's tables.
+const std::vector<std::string>& SlamModeNames();
 // Throws segslam::Error listing the valid names.
 SlamMode ParseSlamMode(const std::string& name);
 
