@@ -135,85 +135,35 @@ std::string WithSpread(const nlohmann::json& results, const std::string& pass, c
   return Cell(median, format, scale) + " [" + Cell(low, format, scale) + ", " + Cell(high, format, scale) + "]";
 }
 
-int RunSuite(const SuiteArgs& args) {
-  const auto start = std::chrono::steady_clock::now();
-  const Suite suite = LoadSuite(args.suite_file);
-  // Every entry's scenario and overrides are checked before the first run.
-  for (const SuiteEntry& entry : suite.entries) {
-    scenes::Scenario scenario = scenes::LoadScenario(entry.scenario);
-    try {
-      scenes::ApplyOverrides(scenario, entry.overrides);
-    } catch (const Error& e) {
-      throw Error(args.suite_file + ": entry " + entry.name + ": set: " + e.what());
-    }
-  }
-  const fs::path out_dir = args.out_dir.empty() ? fs::path("reports") / suite.name : fs::path(args.out_dir);
-  fmt::print("segslam scenario suite: {} ({} entries) into {}\n", suite.name, suite.entries.size(), out_dir.string());
-  std::vector<nlohmann::json> results;
-  int failed_checks = 0, checks = 0;
-  for (std::size_t i = 0; i < suite.entries.size(); ++i) {
-    const SuiteEntry& entry = suite.entries[i];
-    ScenarioRunRequest request = args.run;
-    request.scenario_file = entry.scenario.string();
-    request.overrides = entry.overrides;
-    request.out_dir = (out_dir / entry.name).string();
-    request.junit_file.clear();
-    request.progress_prefix = fmt::format("[{} {}/{}] ", entry.name, i + 1, suite.entries.size());
-    fmt::print("[{}/{}] {}: {}{}\n", i + 1, suite.entries.size(), entry.name, entry.scenario.string(),
-               entry.overrides.empty() ? "" : " --set " + fmt::format("{}", fmt::join(entry.overrides, " --set ")));
-    std::fflush(stdout);
-    const ScenarioReport report = RunScenarioToReport(request);
-    for (const ExpectationResult& check : report.checks) {
-      ++checks;
-      if (!check.passed) ++failed_checks;
-      fmt::print("  {}  {} {}\n", check.passed ? "PASS" : "FAIL", check.expectation.name.text,
-                 std::isnan(check.value) ? std::string("n/a") : fmt::format("{:.4g} {}", check.value, check.expectation.Bounds()));
-    }
-    results.push_back(report.ToJson());
-  }
+// The paper's tables over the suite's entries, each entry in the tables it asked for:
+// Table I (ATE), Tables II and IV (segmentation in the loop), Table III (relocalization).
+struct SuiteTables {
+  ReportTable ate;
+  ReportTable segmentation;
+  ReportTable relocalization;
+};
 
+SuiteTables MakeSuiteTables(const Suite& suite, const std::vector<nlohmann::json>& results) {
   const std::vector<std::string> modes = ModesThatRan(results);
   const bool ratio = std::count(modes.begin(), modes.end(), "plain") && std::count(modes.begin(), modes.end(), "mutual");
-  ReportDocument document("segslam suite: " + suite.name);
-  document.AddMetadata("suite file", args.suite_file);
-  document.AddMetadata("code version", results.front().value("code_version", std::string("?")));
-  document.AddMetadata("machine", MachineLine(results.front().value("machine", nlohmann::json())));
-  const nlohmann::json bench = results.front()["bench"];
-  const std::string segmenter =
-      SimulatedSegmenterLabel(bench.value("segmenter", std::string("?")), bench.value("segmenter_strength", 1.0));
-  document.AddMetadata("bench", fmt::format("{} repeat(s) per mode, segmenter {}, seeds from {}; median [min, max]",
-                                            bench.value("repeats", 0), segmenter, bench.value("seed", 0)));
-  std::string text;
-  auto add_table = [&](const std::string& title, ReportTable table) {
-    if (table.rows.empty()) return;
-    document.AddHeading(title, 2);
-    document.AddTable(table);
-    text += "\n" + title + "\n" + fmt::format("{}", fmt::join(table.header, " | ")) + "\n";
-    for (const auto& row : table.rows) text += fmt::format("{}", fmt::join(row, " | ")) + "\n";
-  };
-
-  ReportTable ate{"ATE RMSE [m], pass 1, aligned to the ground truth", {"sequence"}, {}};
+  SuiteTables tables;
+  ReportTable& ate = tables.ate;
+  ate = {"ATE RMSE [m], pass 1, aligned to the ground truth", {"sequence"}, {}};
   for (const std::string& mode : modes) ate.header.push_back(mode);
   if (ratio) ate.header.push_back("mutual / plain");
-  ReportTable seg{"Raw vs refined masks of the mutual loop (SLAM poses) [%]",
-                  {"sequence", "raw mAP", "raw AP50", "raw mIoU", "refined mAP", "refined AP50", "refined mIoU"}, {}};
-  ReportTable reloc{"Pass 2 on pass 1's long-term map, not re-aligned: localized share and ATE RMSE [m]",
-                    {"route"}, {}};
+  ReportTable& seg = tables.segmentation;
+  seg = {"Raw vs refined masks of the mutual loop (SLAM poses) [%]",
+         {"sequence", "raw mAP", "raw AP50", "raw mIoU", "refined mAP", "refined AP50", "refined mIoU"}, {}};
+  ReportTable& reloc = tables.relocalization;
+  reloc = {"Pass 2 on pass 1's long-term map, not re-aligned: localized share and ATE RMSE [m]", {"route"}, {}};
   for (const std::string& mode : modes) {
     reloc.header.push_back(mode + " localized");
     reloc.header.push_back(mode + " ATE");
   }
   if (ratio) reloc.header.push_back("mutual / plain");
-  nlohmann::json joined = {{"suite", suite.name}, {"entries", nlohmann::json::array()}};
   for (std::size_t i = 0; i < suite.entries.size(); ++i) {
     const SuiteEntry& entry = suite.entries[i];
     const nlohmann::json& r = results[i];
-    joined["entries"].push_back({{"name", entry.name},
-                                 {"scenario", entry.scenario.string()},
-                                 {"overrides", entry.overrides},
-                                 {"report", entry.name + "/report.html"},
-                                 {"summary", r["summary"]},
-                                 {"expectations", r["expectations"]}});
     if (entry.tables.count("ate")) {
       std::vector<std::string> row = {entry.name};
       for (const std::string& mode : modes) row.push_back(WithSpread(r, "pass1", mode, "ate_rmse_m", "{:.4f}"));
@@ -245,12 +195,92 @@ int RunSuite(const SuiteArgs& args) {
       reloc.rows.push_back(row);
     }
   }
-  add_table("Table I: ATE on TUM-like office sequences", ate);
-  add_table("Tables II and IV: segmentation in the loop", seg);
-  add_table("Table III: relocalization on two-pass city routes", reloc);
+  return tables;
+}
+
+// Every entry's scenario and overrides, checked before the first run.
+void CheckSuiteEntries(const Suite& suite, const std::string& suite_file) {
+  for (const SuiteEntry& entry : suite.entries) {
+    scenes::Scenario scenario = scenes::LoadScenario(entry.scenario);
+    try {
+      scenes::ApplyOverrides(scenario, entry.overrides);
+    } catch (const Error& e) {
+      throw Error(suite_file + ": entry " + entry.name + ": set: " + e.what());
+    }
+  }
+}
+
+// Runs entry i as `scenario run` would, into out_dir/<entry name>/, and prints its checks.
+ScenarioReport RunSuiteEntry(const Suite& suite, std::size_t i, const SuiteArgs& args, const fs::path& out_dir) {
+  const SuiteEntry& entry = suite.entries[i];
+  ScenarioRunRequest request = args.run;
+  request.scenario_file = entry.scenario.string();
+  request.overrides = entry.overrides;
+  request.out_dir = (out_dir / entry.name).string();
+  request.junit_file.clear();
+  request.progress_prefix = fmt::format("[{} {}/{}] ", entry.name, i + 1, suite.entries.size());
+  fmt::print("[{}/{}] {}: {}{}\n", i + 1, suite.entries.size(), entry.name, entry.scenario.string(),
+             entry.overrides.empty() ? "" : " --set " + fmt::format("{}", fmt::join(entry.overrides, " --set ")));
+  std::fflush(stdout);
+  ScenarioReport report = RunScenarioToReport(request);
+  for (const ExpectationResult& check : report.checks) {
+    fmt::print("  {}  {} {}\n", check.passed ? "PASS" : "FAIL", check.expectation.name.text,
+               std::isnan(check.value) ? std::string("n/a") : fmt::format("{:.4g} {}", check.value, check.expectation.Bounds()));
+  }
+  return report;
+}
+
+int RunSuite(const SuiteArgs& args) {
+  const auto start = std::chrono::steady_clock::now();
+  const Suite suite = LoadSuite(args.suite_file);
+  CheckSuiteEntries(suite, args.suite_file);
+  const fs::path out_dir = args.out_dir.empty() ? fs::path("reports") / suite.name : fs::path(args.out_dir);
+  fmt::print("segslam scenario suite: {} ({} entries) into {}\n", suite.name, suite.entries.size(), out_dir.string());
+  std::vector<nlohmann::json> results;
+  int failed_checks = 0, checks = 0;
+  for (std::size_t i = 0; i < suite.entries.size(); ++i) {
+    const ScenarioReport report = RunSuiteEntry(suite, i, args, out_dir);
+    checks += static_cast<int>(report.checks.size());
+    failed_checks += static_cast<int>(std::count_if(report.checks.begin(), report.checks.end(),
+                                                    [](const ExpectationResult& check) { return !check.passed; }));
+    results.push_back(report.ToJson());
+  }
+
+  ReportDocument document("segslam suite: " + suite.name);
+  document.AddMetadata("suite file", args.suite_file);
+  document.AddMetadata("code version", results.front().value("code_version", std::string("?")));
+  document.AddMetadata("machine", MachineLine(results.front().value("machine", nlohmann::json())));
+  const nlohmann::json bench = results.front()["bench"];
+  const std::string segmenter =
+      SimulatedSegmenterLabel(bench.value("segmenter", std::string("?")), bench.value("segmenter_strength", 1.0));
+  document.AddMetadata("bench", fmt::format("{} repeat(s) per mode, segmenter {}, seeds from {}; median [min, max]",
+                                            bench.value("repeats", 0), segmenter, bench.value("seed", 0)));
+  std::string text;
+  auto add_table = [&](const std::string& title, const ReportTable& table) {
+    if (table.rows.empty()) return;
+    document.AddHeading(title, 2);
+    document.AddTable(table);
+    text += "\n" + title + "\n" + fmt::format("{}", fmt::join(table.header, " | ")) + "\n";
+    for (const auto& row : table.rows) text += fmt::format("{}", fmt::join(row, " | ")) + "\n";
+  };
+  const SuiteTables tables = MakeSuiteTables(suite, results);
+  add_table("Table I: ATE on TUM-like office sequences", tables.ate);
+  add_table("Tables II and IV: segmentation in the loop", tables.segmentation);
+  add_table("Table III: relocalization on two-pass city routes", tables.relocalization);
   document.AddHeading("Entries", 2);
   for (const SuiteEntry& entry : suite.entries) {
     document.AddParagraph(entry.name + ": " + entry.name + "/report.html (every table, figures, each run)");
+  }
+
+  nlohmann::json joined = {{"suite", suite.name}, {"entries", nlohmann::json::array()}};
+  for (std::size_t i = 0; i < suite.entries.size(); ++i) {
+    const SuiteEntry& entry = suite.entries[i];
+    joined["entries"].push_back({{"name", entry.name},
+                                 {"scenario", entry.scenario.string()},
+                                 {"overrides", entry.overrides},
+                                 {"report", entry.name + "/report.html"},
+                                 {"summary", results[i]["summary"]},
+                                 {"expectations", results[i]["expectations"]}});
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   joined["seconds"] = seconds;
