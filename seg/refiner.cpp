@@ -473,10 +473,11 @@ std::vector<std::optional<RegionMatch>> MatchRegions(const RefinerOptions& optio
   return match_of_cur;
 }
 
-// Algorithm 1 for a matched pair: *instance (a copy of the current region) keeps its
-// mask, or takes the projected region's where the current one has lost part of it
-// (shrink, or repair of a missing part), or is trimmed to the projection; it takes the
-// previous track id and at least a share of the previous score. *decision records why.
+// Algorithm 1 for a matched pair. *instance (a copy of the current region) keeps its
+// mask, or takes the projected region's: where it spills past the projection that it
+// covers (shrink; or it is trimmed to the projection, trim_instead_of_replace), or where
+// it lies inside a projection it covers only in part (repair of a missed part). It takes
+// the previous track id and at least a share of the previous score. *decision says why.
 void RefineMatchedRegion(const RefinerOptions& options, const PinholeCamera& camera,
                          const ProjectionWorkspace& ws, const RegionMatch& match,
                          const RegionStats& cur_stats, const InstanceMask& previous,

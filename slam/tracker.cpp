@@ -803,8 +803,8 @@ struct Tracker::Impl {
   }
 
   // The verdict on this frame's measurement alone: moving needs enough points, a share of
-  // them moving and a median displacement that agrees; "judged" (static or moving) also
-  // needs a full baseline to call an instance static.
+  // them moving and, where they give 3-D displacements, a median displacement over the
+  // threshold; a static verdict also needs the measurement to span a full baseline.
   void DecideMotion(bool full_baseline, const MotionEvidence& evidence, InstanceJudgement* judgement) const {
     judgement->moving_share =
         judgement->num_points > 0 ? double(judgement->num_moving_points) / judgement->num_points : 0;
@@ -817,8 +817,8 @@ struct Tracker::Impl {
   }
 
   // What the instance's recent frames add: an instance seen moving in enough frames in a
-  // row stays moving until a frame shows enough of it still, and the frames it is seen
-  // still in a row are counted (trust_young_points in JudgeInstances()).
+  // row stays moving until a frame shows enough of it still. The frames it is judged still
+  // since it last moved are counted (they decide trust_young_points in JudgeInstances()).
   void ApplyMotionMemory(bool full_baseline, InstanceJudgement* judgement, InstanceMotionMemory* memory) const {
     if (judgement->moving) {
       const bool in_a_row = current.stamp_s - memory->last_moving_stamp_s <= options.moving_memory_s + 1e-9;
