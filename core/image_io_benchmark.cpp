@@ -71,7 +71,8 @@ const BenchmarkFrames& Frames() {
       loaded.depth.push_back(ReadDepthImage(file, loaded.depth_factor));
     }
     if (loaded.color.empty()) throw FileError(dir / "rgb.txt", "lists no frames");
-    loaded.label = dir.filename().string() + ", " + std::to_string(loaded.color.size()) +
+    // "city/pass1" rather than "pass1": a generated dataset's passes share their names.
+    loaded.label = (dir.parent_path().filename() / dir.filename()).string() + ", " + std::to_string(loaded.color.size()) +
                    " frames " + std::to_string(loaded.color.front().cols) + "x" +
                    std::to_string(loaded.color.front().rows);
     return loaded;
