@@ -217,55 +217,42 @@ BenchSettings EffectiveBench(const scenes::Scenario& scenario, const ScenarioRun
   return bench;
 }
 
-ScenarioReport RunScenarioToReport(const ScenarioRunRequest& args) {
-  const auto start = std::chrono::steady_clock::now();
-  // Everything that can be refused is checked before any work starts.
-  scenes::Scenario scenario = scenes::LoadScenario(args.scenario_file);
-  try {
-    scenes::ApplyOverrides(scenario, args.overrides);
-  } catch (const Error& e) {
-    throw Error(std::string("--set ") + e.what());
-  }
-  // Thresholds are checked against the scenario's own modes (a mode it never runs is an
-  // error in the file); --modes may then leave some of them out for this run.
-  std::vector<Expectation> expectations = ParseExpectations(
-      scenario.expect, BenchSettings::FromYaml(scenario.bench, args.scenario_file).modes, args.scenario_file);
-  const BenchSettings bench = EffectiveBench(scenario, args);
+namespace {
+
+// The expectations this run can check: those whose modes all run (--modes may leave some
+// of the scenario's modes out). The others' names go to *skipped.
+std::vector<Expectation> CheckableExpectations(std::vector<Expectation> expectations, const BenchSettings& bench,
+                                               std::vector<std::string>* skipped) {
   const auto mode_runs = [&](const std::string& mode) {
     return mode.empty() || std::find(bench.modes.begin(), bench.modes.end(), mode) != bench.modes.end();
   };
-  std::vector<std::string> skipped;
   for (auto it = expectations.begin(); it != expectations.end();) {
     if (mode_runs(it->name.mode) && mode_runs(it->name.denominator_mode)) {
       ++it;
     } else {
-      skipped.push_back(it->name.text);
+      skipped->push_back(it->name.text);
       it = expectations.erase(it);
     }
   }
-  sim::GenerateOptions generate_options;
-  generate_options.backend = sim::ParseGlBackend(args.gl);
-  generate_options.max_frames_per_pass = args.frames;
-  const std::atomic<bool>* cancel = InstallInterruptFlag();
-  generate_options.cancel = cancel;
+  return expectations;
+}
 
-  const fs::path report_dir = args.out_dir.empty() ? fs::path("reports") / scenario.name : fs::path(args.out_dir);
-  const fs::path dataset = fs::path(args.cache_dir) / (scenario.name + "-" + DatasetCacheKey(scenario, args.frames));
-  fmt::print("segslam scenario run: {} ({}), modes {}, {} repeat(s), segmenter {}\n", scenario.name,
-             args.scenario_file, fmt::format("{}", fmt::join(bench.modes, ", ")), bench.repeats, bench.SegmenterLabel());
-  for (const std::string& name : skipped) fmt::print("expectation {} not checked: --modes leaves its mode out\n", name);
-
-  // The dataset, generated once per effective scenario and code version. The generator
-  // writes into a staging folder and renames it, so an existing folder is complete.
-  std::fflush(stdout);
-  ScenarioReport report;
-  report.dataset_from_cache = IsTwoPassDataset(dataset);
-  if (report.dataset_from_cache) {
+// The scenario's dataset in `dataset`, generated once per effective scenario and code
+// version. The generator writes into a staging folder and renames it, so an existing
+// folder is complete. Returns whether it was there already.
+bool EnsureDataset(const scenes::Scenario& scenario, const fs::path& dataset, const ScenarioRunRequest& args,
+                   sim::GlBackend backend, const std::atomic<bool>* cancel) {
+  const bool cached = IsTwoPassDataset(dataset);
+  if (cached) {
     fmt::print("dataset {} (cached)\n", dataset.string());
     std::fflush(stdout);
   } else {
-    fs::create_directories(dataset.parent_path());
+    sim::GenerateOptions generate_options;
+    generate_options.backend = backend;
+    generate_options.max_frames_per_pass = args.frames;
+    generate_options.cancel = cancel;
     generate_options.overwrite = true;  // a folder there that is not a dataset is replaced
+    fs::create_directories(dataset.parent_path());
     ProgressBar bar(args.progress_prefix + "generate " + scenario.name);
     const sim::GenerateSummary summary =
         sim::GenerateDataset(scenario, dataset, generate_options, [&](const sim::GenerationProgress& p) {
@@ -277,15 +264,11 @@ ScenarioReport RunScenarioToReport(const ScenarioRunRequest& args) {
   // Written on every use: its key names this build, so a dataset from before records
   // were kept gets one too.
   RecordCachedDataset(dataset, scenario.name, args.frames, SEGSLAM_VERSION);
+  return cached;
+}
 
-  // An earlier report in the same place goes first, so a run that stops half-way leaves
-  // no results.json that looks complete.
-  for (const char* stale : {"results.json", "report.md", "report.html", "scenario.yaml"}) fs::remove(report_dir / stale);
-  if (!args.junit_file.empty()) fs::remove(args.junit_file);
-  fs::remove_all(report_dir / "runs");
-  fs::remove_all(report_dir / "figures");
-  fs::create_directories(report_dir / "runs");
-  // Every run, in report order: each mode `repeats` times, a deterministic mode once.
+// Every run, in report order: each mode `repeats` times, a deterministic mode once.
+std::vector<RepeatRun> PlanRuns(const BenchSettings& bench) {
   std::vector<RepeatRun> runs;
   for (const std::string& mode : bench.modes) {
     const bool deterministic = bench.ModeIsDeterministic(mode);
@@ -303,6 +286,48 @@ ScenarioReport RunScenarioToReport(const ScenarioRunRequest& args) {
       runs.push_back(std::move(run));
     }
   }
+  return runs;
+}
+
+}  // namespace
+
+ScenarioReport RunScenarioToReport(const ScenarioRunRequest& args) {
+  const auto start = std::chrono::steady_clock::now();
+  // Everything that can be refused is checked before any work starts.
+  scenes::Scenario scenario = scenes::LoadScenario(args.scenario_file);
+  try {
+    scenes::ApplyOverrides(scenario, args.overrides);
+  } catch (const Error& e) {
+    throw Error(std::string("--set ") + e.what());
+  }
+  // Thresholds are checked against the scenario's own modes (a mode it never runs is an
+  // error in the file); --modes may then leave some of them out for this run.
+  std::vector<Expectation> expectations = ParseExpectations(
+      scenario.expect, BenchSettings::FromYaml(scenario.bench, args.scenario_file).modes, args.scenario_file);
+  const BenchSettings bench = EffectiveBench(scenario, args);
+  std::vector<std::string> skipped;
+  expectations = CheckableExpectations(std::move(expectations), bench, &skipped);
+  const sim::GlBackend backend = sim::ParseGlBackend(args.gl);
+  const std::atomic<bool>* cancel = InstallInterruptFlag();
+
+  const fs::path report_dir = args.out_dir.empty() ? fs::path("reports") / scenario.name : fs::path(args.out_dir);
+  const fs::path dataset = fs::path(args.cache_dir) / (scenario.name + "-" + DatasetCacheKey(scenario, args.frames));
+  fmt::print("segslam scenario run: {} ({}), modes {}, {} repeat(s), segmenter {}\n", scenario.name,
+             args.scenario_file, fmt::format("{}", fmt::join(bench.modes, ", ")), bench.repeats, bench.SegmenterLabel());
+  for (const std::string& name : skipped) fmt::print("expectation {} not checked: --modes leaves its mode out\n", name);
+
+  std::fflush(stdout);
+  ScenarioReport report;
+  report.dataset_from_cache = EnsureDataset(scenario, dataset, args, backend, cancel);
+
+  // An earlier report in the same place goes first, so a run that stops half-way leaves
+  // no results.json that looks complete.
+  for (const char* stale : {"results.json", "report.md", "report.html", "scenario.yaml"}) fs::remove(report_dir / stale);
+  if (!args.junit_file.empty()) fs::remove(args.junit_file);
+  fs::remove_all(report_dir / "runs");
+  fs::remove_all(report_dir / "figures");
+  fs::create_directories(report_dir / "runs");
+  std::vector<RepeatRun> runs = PlanRuns(bench);
   std::fflush(stdout);
   RunRepeats(&runs, bench, dataset, report_dir, args, cancel);
   report.runs = std::move(runs);
