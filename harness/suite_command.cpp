@@ -146,16 +146,16 @@ struct SuiteTables {
 SuiteTables MakeSuiteTables(const Suite& suite, const std::vector<nlohmann::json>& results) {
   const std::vector<std::string> modes = ModesThatRan(results);
   const bool ratio = std::count(modes.begin(), modes.end(), "plain") && std::count(modes.begin(), modes.end(), "mutual");
-  SuiteTables tables;
+  SuiteTables tables{
+      {"ATE RMSE [m], pass 1, aligned to the ground truth", {"sequence"}, {}},
+      {"Raw vs refined masks of the mutual loop (SLAM poses) [%]",
+       {"sequence", "raw mAP", "raw AP50", "raw mIoU", "refined mAP", "refined AP50", "refined mIoU"}, {}},
+      {"Pass 2 on pass 1's long-term map, not re-aligned: localized share and ATE RMSE [m]", {"route"}, {}}};
   ReportTable& ate = tables.ate;
-  ate = {"ATE RMSE [m], pass 1, aligned to the ground truth", {"sequence"}, {}};
+  ReportTable& seg = tables.segmentation;
+  ReportTable& reloc = tables.relocalization;
   for (const std::string& mode : modes) ate.header.push_back(mode);
   if (ratio) ate.header.push_back("mutual / plain");
-  ReportTable& seg = tables.segmentation;
-  seg = {"Raw vs refined masks of the mutual loop (SLAM poses) [%]",
-         {"sequence", "raw mAP", "raw AP50", "raw mIoU", "refined mAP", "refined AP50", "refined mIoU"}, {}};
-  ReportTable& reloc = tables.relocalization;
-  reloc = {"Pass 2 on pass 1's long-term map, not re-aligned: localized share and ATE RMSE [m]", {"route"}, {}};
   for (const std::string& mode : modes) {
     reloc.header.push_back(mode + " localized");
     reloc.header.push_back(mode + " ATE");
