@@ -167,157 +167,153 @@ struct ProjectionWorkspace {
 
 namespace {
 
-// The projection proper: fills ws->label/zbuf and ws->regions.
-void ProjectInto(const RefinerOptions& options, const PinholeCamera& camera,
-                 const FrameSegmentation& previous_refined, const cv::Mat& previous_depth_m,
-                 const Eigen::Isometry3d& T_cur_prev,
-                 const std::map<std::uint16_t, Eigen::Isometry3d>& instance_motion_prev,
-                 const cv::Mat& current_depth_m, ProjectionWorkspace* ws) {
-  const int W = camera.width, H = camera.height;
-  CheckInputImage(previous_depth_m, CV_32F, camera, "previous depth");
-  if (!current_depth_m.empty()) CheckInputImage(current_depth_m, CV_32F, camera, "current depth");
-  const size_t n = previous_refined.instances.size();
-  if (ws->zbuf.rows != H || ws->zbuf.cols != W) {
-    ws->zbuf.create(H, W, CV_32F);
+// Empties the z-buffer and label image where the last projection wrote (allocating them
+// on first use or a new camera size) and sizes the per-region outputs.
+void ResetWorkspace(int width, int height, size_t regions, ProjectionWorkspace* ws) {
+  if (ws->zbuf.rows != height || ws->zbuf.cols != width) {
+    ws->zbuf.create(height, width, CV_32F);
     ws->zbuf.setTo(std::numeric_limits<float>::infinity());
-    ws->label.create(H, W, CV_16U);
+    ws->label.create(height, width, CV_16U);
     ws->label.setTo(0);
   } else if (!ws->dirty.empty()) {
     ws->zbuf(ws->dirty).setTo(std::numeric_limits<float>::infinity());
     ws->label(ws->dirty).setTo(0);
   }
   ws->dirty = cv::Rect();
-  ws->regions.assign(n, RegionStats());
-  ws->touched.assign(n, cv::Rect());
-  if (n == 0) return;
+  ws->regions.assign(regions, RegionStats());
+  ws->touched.assign(regions, cv::Rect());
+}
 
-  // Normalised ray coordinates per column / row.
-  std::vector<double> xn(W), yn(H);
-  for (int u = 0; u < W; ++u) xn[u] = (u - camera.cx) / camera.fx;
-  for (int v = 0; v < H; ++v) yn[v] = (v - camera.cy) / camera.fy;
-  const double fx = camera.fx, fy = camera.fy, cx = camera.cx, cy = camera.cy;
-  const double footprint = options.splat_footprint_scale;
+bool HasDepth(float z) { return z > 0 && std::isfinite(z); }
 
-  cv::Mat& zbuf = ws->zbuf;
-  cv::Mat& label = ws->label;
-  std::vector<cv::Rect>& touched = ws->touched;  // bbox of pixels each region wrote
-  cv::Rect all_touched;
-  std::vector<Splat>& splats = ws->splats;
-  std::vector<float>& depths = ws->depths;
-
-  for (size_t i = 0; i < n; ++i) {
-    const InstanceMask& instance = previous_refined.instances[i];
-    CheckInputImage(instance.mask, CV_8U, camera, "previous instance mask");
-    const RegionStats stats = Measure(instance.mask);
-    if (stats.area_px == 0) continue;
-    const auto motion = instance_motion_prev.find(instance.track_id);
-    const Eigen::Isometry3d& T =
-        motion != instance_motion_prev.end() ? motion->second : T_cur_prev;
-    const Eigen::Matrix3d R = T.linear();
-    const Eigen::Vector3d t = T.translation();
-
-    // Median depth of the region's measured pixels, for pixels without depth.
-    float fill_depth = 0;
-    if (options.fill_missing_depth_with_median) {
-      depths.clear();
-      bool any_missing = false;
-      for (int v = stats.bbox.y; v < stats.bbox.br().y; ++v) {
-        const std::uint8_t* m = instance.mask.ptr<std::uint8_t>(v);
-        const float* d = previous_depth_m.ptr<float>(v);
-        for (int u = stats.bbox.x; u < stats.bbox.br().x; ++u) {
-          if (!m[u]) continue;
-          if (d[u] > 0 && std::isfinite(d[u])) {
-            depths.push_back(d[u]);
-          } else {
-            any_missing = true;
-          }
-        }
+// The depth given to a region's pixels that have none: the median of its measured
+// pixels, or 0 (such pixels are not projected) when none is missing or none measured.
+float MissingDepthFill(const cv::Mat& mask, const cv::Rect& bbox, const cv::Mat& depth_m,
+                       std::vector<float>* scratch) {
+  scratch->clear();
+  bool any_missing = false;
+  for (int v = bbox.y; v < bbox.br().y; ++v) {
+    const std::uint8_t* m = mask.ptr<std::uint8_t>(v);
+    const float* d = depth_m.ptr<float>(v);
+    for (int u = bbox.x; u < bbox.br().x; ++u) {
+      if (!m[u]) continue;
+      if (HasDepth(d[u])) {
+        scratch->push_back(d[u]);
+      } else {
+        any_missing = true;
       }
-      if (any_missing && !depths.empty()) {
-        auto mid = depths.begin() + depths.size() / 2;
-        std::nth_element(depths.begin(), mid, depths.end());
-        fill_depth = *mid;
-      }
-    }
-
-    // Project: X' = z * R * ray + t, ray = (xn, yn, 1).
-    splats.clear();
-    for (int v = stats.bbox.y; v < stats.bbox.br().y; ++v) {
-      const std::uint8_t* m = instance.mask.ptr<std::uint8_t>(v);
-      const float* d = previous_depth_m.ptr<float>(v);
-      const Eigen::Vector3d row_base = R.col(1) * yn[v] + R.col(2);
-      for (int u = stats.bbox.x; u < stats.bbox.br().x; ++u) {
-        if (!m[u]) continue;
-        float z = d[u];
-        if (!(z > 0 && std::isfinite(z))) {
-          if (fill_depth <= 0) continue;
-          z = fill_depth;
-        }
-        const Eigen::Vector3d ray = R.col(0) * xn[u] + row_base;
-        const Eigen::Vector3d X = static_cast<double>(z) * ray + t;
-        if (X.z() < options.min_depth_m) continue;
-        const double inv_z = 1.0 / X.z();
-        const double xp = X.x() * inv_z, yp = X.y() * inv_z;
-        const double up = fx * xp + cx, vp = fy * yp + cy;
-        if (up < -1.5 || vp < -1.5 || up > W + 0.5 || vp > H + 0.5) continue;
-        // Local warp Jacobian for a surface fronto-parallel to the previous camera;
-        // the footprint is the axis-aligned box of the source pixel's image.
-        const double s = z * inv_z;
-        const double j00 = s * (R(0, 0) - xp * R(2, 0));
-        const double j01 = s * (fx / fy) * (R(0, 1) - xp * R(2, 1));
-        const double j10 = s * (fy / fx) * (R(1, 0) - yp * R(2, 0));
-        const double j11 = s * (R(1, 1) - yp * R(2, 1));
-        const double hx = 0.5 * footprint * (std::abs(j00) + std::abs(j01));
-        const double hy = 0.5 * footprint * (std::abs(j10) + std::abs(j11));
-        splats.push_back({static_cast<float>(up), static_cast<float>(vp),
-                          static_cast<float>(X.z()), static_cast<float>(hx),
-                          static_cast<float>(hy)});
-      }
-    }
-
-    // Splat into the shared z-buffer: pixel centres in [u - hx, u + hx) x [v - hy, v + hy).
-    const std::uint16_t id = static_cast<std::uint16_t>(i + 1);
-    int bx0 = W, by0 = H, bx1 = -1, by1 = -1;
-    for (const Splat& p : splats) {
-      const int x0 = std::max(0, static_cast<int>(std::ceil(p.u - p.hx)));
-      const int x1 = std::min(W - 1, static_cast<int>(std::ceil(p.u + p.hx)) - 1);
-      const int y0 = std::max(0, static_cast<int>(std::ceil(p.v - p.hy)));
-      const int y1 = std::min(H - 1, static_cast<int>(std::ceil(p.v + p.hy)) - 1);
-      if (x0 > x1 || y0 > y1) continue;
-      bx0 = std::min(bx0, x0);
-      bx1 = std::max(bx1, x1);
-      by0 = std::min(by0, y0);
-      by1 = std::max(by1, y1);
-      for (int y = y0; y <= y1; ++y) {
-        float* zr = zbuf.ptr<float>(y);
-        std::uint16_t* lr = label.ptr<std::uint16_t>(y);
-        for (int x = x0; x <= x1; ++x) {
-          if (p.z < zr[x]) {
-            zr[x] = p.z;
-            lr[x] = id;
-          }
-        }
-      }
-    }
-    if (bx1 >= 0) {
-      touched[i] = cv::Rect(bx0, by0, bx1 - bx0 + 1, by1 - by0 + 1);
-      all_touched = all_touched.empty() ? touched[i] : (all_touched | touched[i]);
     }
   }
+  if (!any_missing || scratch->empty()) return 0;
+  auto mid = scratch->begin() + scratch->size() / 2;
+  std::nth_element(scratch->begin(), mid, scratch->end());
+  return *mid;
+}
 
-  // Depth-aware closing: a pixel that is empty, or shows something farther than the
-  // region on both of its sides, is a crack in that region.
+// Normalised image coordinates of each column (x) and row (y): the ray of pixel (u, v)
+// is (x[u], y[v], 1).
+struct PixelRays {
+  explicit PixelRays(const PinholeCamera& camera) : x(camera.width), y(camera.height) {
+    for (int u = 0; u < camera.width; ++u) x[u] = (u - camera.cx) / camera.fx;
+    for (int v = 0; v < camera.height; ++v) y[v] = (v - camera.cy) / camera.fy;
+  }
+  std::vector<double> x, y;
+};
+
+// Moves each pixel of a region (inside bbox) by T into the current view, X' = z R ray + t,
+// and gives it the footprint of its source pixel there.
+void ProjectRegionPixels(const RefinerOptions& options, const PinholeCamera& camera,
+                         const PixelRays& rays, const cv::Mat& mask, const cv::Rect& bbox,
+                         const cv::Mat& depth_m, float fill_depth, const Eigen::Isometry3d& T,
+                         std::vector<Splat>* splats) {
+  const int W = camera.width, H = camera.height;
+  const double fx = camera.fx, fy = camera.fy, cx = camera.cx, cy = camera.cy;
+  const double footprint = options.splat_footprint_scale;
+  const Eigen::Matrix3d R = T.linear();
+  const Eigen::Vector3d t = T.translation();
+  splats->clear();
+  for (int v = bbox.y; v < bbox.br().y; ++v) {
+    const std::uint8_t* m = mask.ptr<std::uint8_t>(v);
+    const float* d = depth_m.ptr<float>(v);
+    const Eigen::Vector3d row_base = R.col(1) * rays.y[v] + R.col(2);
+    for (int u = bbox.x; u < bbox.br().x; ++u) {
+      if (!m[u]) continue;
+      float z = d[u];
+      if (!HasDepth(z)) {
+        if (fill_depth <= 0) continue;
+        z = fill_depth;
+      }
+      const Eigen::Vector3d ray = R.col(0) * rays.x[u] + row_base;
+      const Eigen::Vector3d X = static_cast<double>(z) * ray + t;
+      if (X.z() < options.min_depth_m) continue;
+      const double inv_z = 1.0 / X.z();
+      const double xp = X.x() * inv_z, yp = X.y() * inv_z;
+      const double up = fx * xp + cx, vp = fy * yp + cy;
+      if (up < -1.5 || vp < -1.5 || up > W + 0.5 || vp > H + 0.5) continue;
+      // Local warp Jacobian for a surface fronto-parallel to the previous camera;
+      // the footprint is the axis-aligned box of the source pixel's image.
+      const double s = z * inv_z;
+      const double j00 = s * (R(0, 0) - xp * R(2, 0));
+      const double j01 = s * (fx / fy) * (R(0, 1) - xp * R(2, 1));
+      const double j10 = s * (fy / fx) * (R(1, 0) - yp * R(2, 0));
+      const double j11 = s * (R(1, 1) - yp * R(2, 1));
+      const double hx = 0.5 * footprint * (std::abs(j00) + std::abs(j01));
+      const double hy = 0.5 * footprint * (std::abs(j10) + std::abs(j11));
+      splats->push_back({static_cast<float>(up), static_cast<float>(vp),
+                         static_cast<float>(X.z()), static_cast<float>(hx),
+                         static_cast<float>(hy)});
+    }
+  }
+}
+
+// Writes the splats into the z-buffer under `id`, nearest first, each over the pixel
+// centres in [u - hx, u + hx) x [v - hy, v + hy). Returns the box of pixels they cover
+// (empty when none lands in the image).
+cv::Rect SplatIntoZBuffer(const std::vector<Splat>& splats, std::uint16_t id, cv::Mat* zbuf,
+                          cv::Mat* label) {
+  const int W = zbuf->cols, H = zbuf->rows;
+  int bx0 = W, by0 = H, bx1 = -1, by1 = -1;
+  for (const Splat& p : splats) {
+    const int x0 = std::max(0, static_cast<int>(std::ceil(p.u - p.hx)));
+    const int x1 = std::min(W - 1, static_cast<int>(std::ceil(p.u + p.hx)) - 1);
+    const int y0 = std::max(0, static_cast<int>(std::ceil(p.v - p.hy)));
+    const int y1 = std::min(H - 1, static_cast<int>(std::ceil(p.v + p.hy)) - 1);
+    if (x0 > x1 || y0 > y1) continue;
+    bx0 = std::min(bx0, x0);
+    bx1 = std::max(bx1, x1);
+    by0 = std::min(by0, y0);
+    by1 = std::max(by1, y1);
+    for (int y = y0; y <= y1; ++y) {
+      float* zr = zbuf->ptr<float>(y);
+      std::uint16_t* lr = label->ptr<std::uint16_t>(y);
+      for (int x = x0; x <= x1; ++x) {
+        if (p.z < zr[x]) {
+          zr[x] = p.z;
+          lr[x] = id;
+        }
+      }
+    }
+  }
+  if (bx1 < 0) return cv::Rect();
+  return cv::Rect(bx0, by0, bx1 - bx0 + 1, by1 - by0 + 1);
+}
+
+// Depth-aware closing inside `area`: a pixel that is empty, or shows something farther
+// than the region on both of its sides (left and right, or above and below), is a crack
+// in that region and takes its label and mean depth.
+void CloseCracks(const RefinerOptions& options, const cv::Rect& area, cv::Mat* zbuf,
+                 cv::Mat* label) {
   const float tol = static_cast<float>(1.0 + options.depth_tolerance);
-  const cv::Rect inner = all_touched & cv::Rect(1, 1, W - 2, H - 2);
+  const cv::Rect inner = area & cv::Rect(1, 1, zbuf->cols - 2, zbuf->rows - 2);
   for (int iteration = 0; iteration < options.hole_fill_iterations; ++iteration) {
     int filled = 0;
     for (int y = inner.y; y < inner.br().y; ++y) {
-      float* zr = zbuf.ptr<float>(y);
-      std::uint16_t* lr = label.ptr<std::uint16_t>(y);
-      const std::uint16_t* lu = label.ptr<std::uint16_t>(y - 1);
-      const std::uint16_t* ld = label.ptr<std::uint16_t>(y + 1);
-      const float* zu = zbuf.ptr<float>(y - 1);
-      const float* zd = zbuf.ptr<float>(y + 1);
+      float* zr = zbuf->ptr<float>(y);
+      std::uint16_t* lr = label->ptr<std::uint16_t>(y);
+      const std::uint16_t* lu = label->ptr<std::uint16_t>(y - 1);
+      const std::uint16_t* ld = label->ptr<std::uint16_t>(y + 1);
+      const float* zu = zbuf->ptr<float>(y - 1);
+      const float* zd = zbuf->ptr<float>(y + 1);
       for (int x = inner.x; x < inner.br().x; ++x) {
         std::uint16_t l = 0;
         float z = 0;
@@ -339,52 +335,101 @@ void ProjectInto(const RefinerOptions& options, const PinholeCamera& camera,
     }
     if (filled == 0) break;
   }
+}
 
-  ws->dirty = all_touched;
+// Unlabels projected pixels (inside `area`) behind what the current depth image measures
+// there: something now stands in front of the region.
+void DropOccluded(const RefinerOptions& options, const cv::Mat& current_depth_m,
+                  const cv::Rect& area, const cv::Mat& zbuf, cv::Mat* label) {
+  const float keep = static_cast<float>(1.0 - options.occlusion_tolerance);
+  for (int y = area.y; y < area.br().y; ++y) {
+    const float* zr = zbuf.ptr<float>(y);
+    const float* dr = current_depth_m.ptr<float>(y);
+    std::uint16_t* lr = label->ptr<std::uint16_t>(y);
+    for (int x = area.x; x < area.br().x; ++x) {
+      if (lr[x] != 0 && dr[x] > 0 && dr[x] < keep * zr[x]) lr[x] = 0;
+    }
+  }
+}
 
-  if (!current_depth_m.empty() && !all_touched.empty()) {
-    const float keep = static_cast<float>(1.0 - options.occlusion_tolerance);
-    for (int y = all_touched.y; y < all_touched.br().y; ++y) {
-      const float* zr = zbuf.ptr<float>(y);
-      const float* dr = current_depth_m.ptr<float>(y);
-      std::uint16_t* lr = label.ptr<std::uint16_t>(y);
-      for (int x = all_touched.x; x < all_touched.br().x; ++x) {
-        if (lr[x] != 0 && dr[x] > 0 && dr[x] < keep * zr[x]) lr[x] = 0;
+// Box, area and barycentre of the pixels labelled `id`, searched within `area`.
+RegionStats MeasureLabel(const cv::Mat& label, std::uint16_t id, const cv::Rect& area) {
+  RegionStats s;
+  int bx0 = label.cols, by0 = label.rows, bx1 = -1, by1 = -1;
+  std::int64_t sum_x = 0, sum_y = 0;
+  for (int y = area.y; y < area.br().y; ++y) {
+    const std::uint16_t* lr = label.ptr<std::uint16_t>(y);
+    int count = 0;
+    for (int x = area.x; x < area.br().x; ++x) {
+      if (lr[x] == id) {
+        bx0 = std::min(bx0, x);
+        bx1 = std::max(bx1, x);
+        ++count;
+        sum_x += x;
       }
+    }
+    if (count > 0) {
+      by0 = std::min(by0, y);
+      by1 = y;
+      s.area_px += count;
+      sum_y += static_cast<std::int64_t>(y) * count;
+    }
+  }
+  if (s.area_px > 0) {
+    s.bbox = cv::Rect(bx0, by0, bx1 - bx0 + 1, by1 - by0 + 1);
+    s.cx = static_cast<double>(sum_x) / s.area_px;
+    s.cy = static_cast<double>(sum_y) / s.area_px;
+  }
+  return s;
+}
+
+// The projection proper: forward-splats each previous region with its depth and motion
+// (its own when estimated, else the camera's) into one z-buffer, closes the cracks the
+// splatting leaves, drops what the current depth shows occluded, and measures each
+// projected region. Fills ws->label, ws->zbuf and ws->regions.
+void ProjectInto(const RefinerOptions& options, const PinholeCamera& camera,
+                 const FrameSegmentation& previous_refined, const cv::Mat& previous_depth_m,
+                 const Eigen::Isometry3d& T_cur_prev,
+                 const std::map<std::uint16_t, Eigen::Isometry3d>& instance_motion_prev,
+                 const cv::Mat& current_depth_m, ProjectionWorkspace* ws) {
+  CheckInputImage(previous_depth_m, CV_32F, camera, "previous depth");
+  if (!current_depth_m.empty()) CheckInputImage(current_depth_m, CV_32F, camera, "current depth");
+  const size_t n = previous_refined.instances.size();
+  ResetWorkspace(camera.width, camera.height, n, ws);
+  if (n == 0) return;
+
+  const PixelRays rays(camera);
+  cv::Rect all_touched;
+  for (size_t i = 0; i < n; ++i) {
+    const InstanceMask& instance = previous_refined.instances[i];
+    CheckInputImage(instance.mask, CV_8U, camera, "previous instance mask");
+    const RegionStats stats = Measure(instance.mask);
+    if (stats.area_px == 0) continue;
+    const auto motion = instance_motion_prev.find(instance.track_id);
+    const Eigen::Isometry3d& T =
+        motion != instance_motion_prev.end() ? motion->second : T_cur_prev;
+    const float fill_depth =
+        options.fill_missing_depth_with_median
+            ? MissingDepthFill(instance.mask, stats.bbox, previous_depth_m, &ws->depths)
+            : 0.0f;
+    ProjectRegionPixels(options, camera, rays, instance.mask, stats.bbox, previous_depth_m,
+                        fill_depth, T, &ws->splats);
+    ws->touched[i] =
+        SplatIntoZBuffer(ws->splats, static_cast<std::uint16_t>(i + 1), &ws->zbuf, &ws->label);
+    if (!ws->touched[i].empty()) {
+      all_touched = all_touched.empty() ? ws->touched[i] : (all_touched | ws->touched[i]);
     }
   }
 
-  // Per region: box, area and barycentre of its visible pixels, within the box it
-  // wrote (closing stays inside it).
+  CloseCracks(options, all_touched, &ws->zbuf, &ws->label);
+  ws->dirty = all_touched;
+  if (!current_depth_m.empty() && !all_touched.empty()) {
+    DropOccluded(options, current_depth_m, all_touched, ws->zbuf, &ws->label);
+  }
+  // Closing stays inside the box a region wrote, so that box is enough to search.
   for (size_t i = 0; i < n; ++i) {
-    if (touched[i].empty()) continue;
-    RegionStats& s = ws->regions[i];
-    const std::uint16_t id = static_cast<std::uint16_t>(i + 1);
-    int bx0 = W, by0 = H, bx1 = -1, by1 = -1;
-    std::int64_t sum_x = 0, sum_y = 0;
-    for (int y = touched[i].y; y < touched[i].br().y; ++y) {
-      const std::uint16_t* lr = label.ptr<std::uint16_t>(y);
-      int count = 0;
-      for (int x = touched[i].x; x < touched[i].br().x; ++x) {
-        if (lr[x] == id) {
-          bx0 = std::min(bx0, x);
-          bx1 = std::max(bx1, x);
-          ++count;
-          sum_x += x;
-        }
-      }
-      if (count > 0) {
-        by0 = std::min(by0, y);
-        by1 = y;
-        s.area_px += count;
-        sum_y += static_cast<std::int64_t>(y) * count;
-      }
-    }
-    if (s.area_px > 0) {
-      s.bbox = cv::Rect(bx0, by0, bx1 - bx0 + 1, by1 - by0 + 1);
-      s.cx = static_cast<double>(sum_x) / s.area_px;
-      s.cy = static_cast<double>(sum_y) / s.area_px;
-    }
+    if (ws->touched[i].empty()) continue;
+    ws->regions[i] = MeasureLabel(ws->label, static_cast<std::uint16_t>(i + 1), ws->touched[i]);
   }
 }
 
