@@ -4,7 +4,9 @@
 #include <cmath>
 #include <iterator>
 #include <limits>
+#include <map>
 #include <numeric>
+#include <optional>
 #include <stdexcept>
 #include <utility>
 
@@ -486,6 +488,278 @@ bool SimulatedSegmenterOptions::IsValid(std::string* error) const {
 // ---------------------------------------------------------------------------------------
 // The simulation of one frame.
 
+namespace {
+
+// Ground-truth pixels per category in view; confusions go towards look-alikes in view.
+struct CategoriesInView {
+  std::map<int, double> pixels;
+  std::vector<int> ids;  // ascending
+};
+
+CategoriesInView CountCategoriesInView(const std::vector<GtInstance>& frame_instances,
+                                       const InstanceTable& table) {
+  CategoriesInView in_view;
+  for (const GtInstance& gt : frame_instances) {
+    const InstanceInfo* info = table.Find(gt.id);
+    if (info != nullptr) in_view.pixels[info->category_id] += gt.area;
+  }
+  for (const auto& [category, pixels] : in_view.pixels) in_view.ids.push_back(category);
+  return in_view;
+}
+
+// Chance that the network misses the instance in this frame: a base rate plus shares for
+// small, truncated (by the image border; large objects are spared), occluded and moving
+// (blurred) objects, shifted on the logit scale by the instance's difficulty.
+double MissProbability(const SimulatedSegmenterOptions& o, const GtInstance& gt,
+                       const SimulatedInstanceContext& ctx, double difficulty, double image_area) {
+  const double sqrt_area = std::sqrt(static_cast<double>(gt.area));
+  const double small_share =
+      o.small_area_fraction > 0
+          ? std::max(0.0, 1.0 - gt.area / (o.small_area_fraction * image_area))
+          : 0.0;
+  const double large_relief =
+      o.truncated_large_area_fraction > 0
+          ? std::max(0.0, 1.0 - gt.area / (o.truncated_large_area_fraction * image_area))
+          : 1.0;
+  const double truncation =
+      std::min(1.0, gt.border_pixels / std::max(1.0, sqrt_area)) * large_relief;
+  const double occlusion = 1.0 - std::clamp(ctx.visible_share, 0.0, 1.0);
+  double p_miss = o.miss_prob + o.miss_small_prob * small_share +
+                  o.miss_truncated_prob * truncation + o.miss_occluded_prob * occlusion +
+                  (ctx.moving ? o.miss_moving_prob * MotionBlurShare(ctx, o) : 0.0);
+  p_miss = std::clamp(p_miss, 0.0, 1.0);
+  if (p_miss > 0 && p_miss < 1) p_miss = Logistic(Logit(p_miss) + difficulty);
+  return p_miss;
+}
+
+// How far, in pixels, each mask error may reach for one instance: proportional to the
+// square root of its area and scaled up for difficult instances.
+struct ErrorReach {
+  ErrorReach(const SimulatedSegmenterOptions& o, double sqrt_area, double magnitude)
+      : magnitude(magnitude),
+        sqrt_area(sqrt_area),
+        bleed_px(o.bleed_fraction_max * sqrt_area * magnitude),
+        blob_px(o.bleed_blob_prob > 0 ? 6.0 * std::max(bleed_px, 1.0) : 0.0),
+        jitter_px(std::min(o.boundary_jitter_px, o.boundary_jitter_fraction * sqrt_area) *
+                  magnitude),
+        jitter_scale_px(std::max(2.0, o.boundary_jitter_scale_fraction * sqrt_area)),
+        neighbour_px(o.neighbour_bleed_fraction_max * sqrt_area * magnitude) {}
+
+  // The margin around the object within which its mask can change.
+  int Padding() const {
+    return static_cast<int>(std::ceil(std::max({bleed_px, blob_px, neighbour_px}) +
+                                      2.0 * jitter_px)) +
+           2;
+  }
+
+  double magnitude, sqrt_area, bleed_px, blob_px, jitter_px, jitter_scale_px, neighbour_px;
+};
+
+// Missing parts: a few round holes centred on the object.
+void PunchHoles(const SimulatedSegmenterOptions& o, const ErrorReach& reach, const cv::Mat& truth,
+                int area, Rng* rng, cv::Mat* mask) {
+  if (!rng->Bernoulli(o.hole_prob)) return;
+  const int holes = rng->UniformInt(1, o.hole_count_max);
+  for (int h = 0; h < holes; ++h) {
+    const cv::Point centre = RandomPixelOf(rng, truth, area);
+    const double radius =
+        rng->Uniform(0.3, 1.0) * o.hole_radius_fraction * reach.sqrt_area * reach.magnitude;
+    cv::circle(*mask, centre, static_cast<int>(std::lround(radius)), 0, cv::FILLED);
+  }
+}
+
+// Missing parts: one side of the object's box (left, right, top or bottom) cut off.
+void CutOffSide(const SimulatedSegmenterOptions& o, const ErrorReach& reach,
+                const cv::Rect& object_box, Rng* rng, cv::Mat* mask) {
+  if (!rng->Bernoulli(o.cut_prob)) return;
+  const double fraction =
+      std::min(0.9, rng->Uniform(0.2, 1.0) * o.cut_fraction_max * reach.magnitude);
+  const int side = rng->UniformInt(0, 3);
+  const int cut_w = static_cast<int>(std::lround(fraction * object_box.width));
+  const int cut_h = static_cast<int>(std::lround(fraction * object_box.height));
+  const cv::Rect& b = object_box;
+  const cv::Rect cuts[4] = {
+      cv::Rect(b.x, b.y, cut_w, b.height),                       // left
+      cv::Rect(b.x + b.width - cut_w, b.y, cut_w, b.height),     // right
+      cv::Rect(b.x, b.y, b.width, cut_h),                        // top
+      cv::Rect(b.x, b.y + b.height - cut_h, b.width, cut_h)};    // bottom
+  (*mask)(cuts[side] & cv::Rect(0, 0, mask->cols, mask->rows)).setTo(0);
+}
+
+// Oversized: bleeding outward, and sometimes a blob on one side.
+void BleedOutward(const SimulatedSegmenterOptions& o, const ErrorReach& reach,
+                  const cv::Mat& truth, int area, Rng* rng, cv::Mat* mask) {
+  if (!rng->Bernoulli(o.bleed_prob)) return;
+  const int radius = static_cast<int>(std::lround(rng->Uniform(0.3, 1.0) * reach.bleed_px));
+  if (radius > 0) {
+    const cv::Mat kernel =
+        cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * radius + 1, 2 * radius + 1));
+    cv::dilate(*mask, *mask, kernel);
+  }
+  if (!rng->Bernoulli(o.bleed_blob_prob)) return;
+  const cv::Point centre = RandomPixelOf(rng, truth, area);
+  const double angle = rng->Uniform(0, 2 * M_PI);
+  const double distance = rng->Uniform(1.0, 3.0) * std::max(reach.bleed_px, 1.0);
+  const cv::Point shifted(centre.x + static_cast<int>(std::lround(distance * std::cos(angle))),
+                          centre.y + static_cast<int>(std::lround(distance * std::sin(angle))));
+  const int axis = static_cast<int>(std::lround(std::max(2.0, distance)));
+  cv::ellipse(*mask, shifted, cv::Size(axis, std::max(1, axis / 2)), angle * 180 / M_PI, 0, 360,
+              1, cv::FILLED);
+}
+
+// Oversized: spread into the touching instances (gt_ids_box: the ids within the mask's box).
+void BleedIntoNeighbours(const SimulatedSegmenterOptions& o, const ErrorReach& reach,
+                         const cv::Mat& gt_ids_box, std::uint16_t id, const cv::Mat& truth,
+                         Rng* rng, cv::Mat* mask) {
+  if (!rng->Bernoulli(o.neighbour_bleed_prob)) return;
+  const int radius =
+      static_cast<int>(std::lround(rng->Uniform(1.0 / 3.0, 1.0) * reach.neighbour_px));
+  if (radius <= 0) return;
+  const cv::Mat others = (gt_ids_box != 0) & (gt_ids_box != id);  // 0/255
+  cv::Mat reached;
+  const cv::Mat kernel =
+      cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * radius + 1, 2 * radius + 1));
+  cv::dilate(truth, reached, kernel);
+  *mask |= reached & (others / 255);
+}
+
+// The category the network outputs: sometimes a look-alike in view (the same one while
+// the choice stays), leaning towards the class seen more: a rare class is taken for a
+// common look-alike at the full rate, a common one for a rare look-alike seldom.
+int OutputCategory(const SimulatedSegmenterOptions& o, std::uint64_t seed, int frame_index,
+                   std::uint16_t id, int category, const CategoriesInView& in_view) {
+  Rng confusion_rng(seed, frame_index, id, kStreamConfusion);
+  const std::vector<int> look_alikes = LookAlikes(category, in_view.ids);
+  if (look_alikes.empty()) return category;
+  Rng target_rng(seed, -1, id, kStreamConfusionTarget);
+  const int target =
+      look_alikes[target_rng.UniformInt(0, static_cast<int>(look_alikes.size()) - 1)];
+  const double own = in_view.pixels.at(category);
+  const double other = in_view.pixels.at(target);
+  const double lean = std::min(1.0, 2.0 * other / (own + other));
+  return confusion_rng.Bernoulli(o.confusion_prob * lean) ? target : category;
+}
+
+// The network's output for one ground-truth instance, or nothing when it is missed.
+std::optional<InstanceMask> SimulateInstance(const SimulatedSegmenterOptions& o,
+                                             std::uint64_t seed, int frame_index,
+                                             const cv::Mat& gt_ids, const GtInstance& gt,
+                                             const InstanceInfo& info,
+                                             const SimulatedInstanceContext& ctx,
+                                             const CategoriesInView& in_view) {
+  const double image_area = static_cast<double>(gt_ids.total());
+  // Persistent difficulty of this instance (the same in every frame).
+  Rng difficulty_rng(seed, -1, gt.id, kStreamDifficulty);
+  const double difficulty = o.difficulty_sd * difficulty_rng.Normal() +
+                            (IsHardCategory(info.category_id) ? o.hard_category_difficulty : 0.0);
+
+  // Missed? A fresh draw per frame: flicker.
+  if (gt.area < o.min_area_px) return std::nullopt;
+  Rng miss_rng(seed, frame_index, gt.id, kStreamMiss);
+  if (miss_rng.Bernoulli(MissProbability(o, gt, ctx, difficulty, image_area))) {
+    return std::nullopt;
+  }
+
+  // Work in the bounding box grown by the largest outward change.
+  const ErrorReach reach(o, std::sqrt(static_cast<double>(gt.area)), std::exp(0.5 * difficulty));
+  const int pad = reach.Padding();
+  const cv::Rect box = cv::Rect(gt.x0 - pad, gt.y0 - pad, gt.x1 - gt.x0 + 1 + 2 * pad,
+                                gt.y1 - gt.y0 + 1 + 2 * pad) &
+                       cv::Rect(0, 0, gt_ids.cols, gt_ids.rows);
+  cv::Mat truth;
+  cv::compare(gt_ids(box), gt.id, truth, cv::CMP_EQ);
+  truth /= 255;
+  cv::Mat mask = truth.clone();
+  const cv::Rect object_box(gt.x0 - box.x, gt.y0 - box.y, gt.x1 - gt.x0 + 1, gt.y1 - gt.y0 + 1);
+
+  // The mask head's fixed resolution, then each kind of error from its own stream.
+  if (o.mask_resolution > 0) CoarsenToGrid(object_box, o.mask_resolution, &mask);
+  Rng holes_rng(seed, frame_index, gt.id, kStreamHoles);
+  PunchHoles(o, reach, truth, gt.area, &holes_rng, &mask);
+  Rng cut_rng(seed, frame_index, gt.id, kStreamCut);
+  CutOffSide(o, reach, object_box, &cut_rng, &mask);
+  Rng bleed_rng(seed, frame_index, gt.id, kStreamBleed);
+  BleedOutward(o, reach, truth, gt.area, &bleed_rng, &mask);
+  Rng neighbour_rng(seed, frame_index, gt.id, kStreamNeighbourBleed);
+  BleedIntoNeighbours(o, reach, gt_ids(box), gt.id, truth, &neighbour_rng, &mask);
+  Rng jitter_rng(seed, frame_index, gt.id, kStreamJitter);
+  JitterBoundary(&jitter_rng, reach.jitter_px, reach.jitter_scale_px, &mask);
+
+  const int produced = cv::countNonZero(mask);
+  if (produced == 0) return std::nullopt;
+  const int intersection = cv::countNonZero(mask & truth);
+  const double iou = intersection / static_cast<double>(gt.area + produced - intersection);
+
+  InstanceMask out;
+  out.category_id = OutputCategory(o, seed, frame_index, gt.id, info.category_id, in_view);
+  // The score follows the mask's quality; a confused class scores lower.
+  Rng score_rng(seed, frame_index, gt.id, kStreamScore);
+  double score = 1.0 - o.score_iou_weight * (1.0 - iou) + o.score_noise_sd * score_rng.Normal();
+  if (out.category_id != info.category_id) score *= o.confusion_score_factor;
+  out.score = Clamp01(score, 0.01);
+  out.mask = cv::Mat::zeros(gt_ids.size(), CV_8U);
+  mask.copyTo(out.mask(box));
+  return out;
+}
+
+// False positives: blobs on the background, mostly low-scored, each like an object in
+// view: the class and (scaled) size of a random ground-truth instance of the frame, else
+// of a random class of the sequence at the size range.
+std::vector<InstanceMask> SimulateFalsePositives(const SimulatedSegmenterOptions& o,
+                                                 std::uint64_t seed, int frame_index,
+                                                 const cv::Mat& gt_ids,
+                                                 const std::vector<GtInstance>& frame_instances,
+                                                 const InstanceTable& table) {
+  std::vector<InstanceMask> blobs;
+  Rng rng(seed, frame_index, 0, kStreamFalsePositives);
+  const int count = rng.Poisson(o.false_positives_per_frame);
+  if (count == 0) return blobs;
+  const cv::Size size = gt_ids.size();
+  const double image_area = static_cast<double>(size.area());
+  const std::vector<int> sequence_categories = SequenceCategories(table);
+  cv::Mat background;
+  cv::compare(gt_ids, 0, background, cv::CMP_EQ);
+  background /= 255;
+  for (int k = 0; k < count; ++k) {
+    int category = 0;
+    double area = 0;
+    if (!frame_instances.empty()) {
+      const GtInstance& like =
+          frame_instances[rng.UniformInt(0, static_cast<int>(frame_instances.size()) - 1)];
+      category = table.Find(like.id)->category_id;
+      area = std::clamp(like.area * std::exp(rng.Uniform(std::log(0.3), std::log(2.0))),
+                        o.false_positive_area_min * image_area,
+                        o.false_positive_area_max * image_area);
+    } else {
+      category = sequence_categories[rng.UniformInt(
+          0, static_cast<int>(sequence_categories.size()) - 1)];
+      area = image_area * std::exp(rng.Uniform(std::log(o.false_positive_area_min),
+                                               std::log(o.false_positive_area_max)));
+    }
+    const double aspect = std::exp(rng.Uniform(std::log(0.4), std::log(2.5)));
+    const int a = std::max(1, static_cast<int>(std::lround(std::sqrt(area * aspect / M_PI))));
+    const int b = std::max(1, static_cast<int>(std::lround(std::sqrt(area / aspect / M_PI))));
+    const cv::Point centre(rng.UniformInt(0, size.width - 1), rng.UniformInt(0, size.height - 1));
+    const double angle = rng.Uniform(0, 180);
+    const double score = rng.Uniform(0.01, o.false_positive_score_max);
+    cv::Mat blob = cv::Mat::zeros(size, CV_8U);
+    cv::ellipse(blob, centre, cv::Size(a, b), angle, 0, 360, 1, cv::FILLED);
+    const double sqrt_area = std::sqrt(area);
+    JitterBoundary(&rng, std::min(o.boundary_jitter_px, o.boundary_jitter_fraction * sqrt_area),
+                   std::max(2.0, o.boundary_jitter_scale_fraction * sqrt_area), &blob);
+    blob &= background;
+    if (cv::countNonZero(blob) < std::max(20, o.min_area_px)) continue;
+    InstanceMask out;
+    out.category_id = category;
+    out.score = Clamp01(score, 0.01);
+    out.mask = std::move(blob);
+    blobs.push_back(std::move(out));
+  }
+  return blobs;
+}
+
+}  // namespace
+
 SimulatedFrame SimulateSegmentation(const SimulatedSegmenterOptions& options, std::uint64_t seed,
                                     int frame_index, const cv::Mat& gt_ids,
                                     const InstanceTable& table,
@@ -497,24 +771,11 @@ SimulatedFrame SimulateSegmentation(const SimulatedSegmenterOptions& options, st
                 CvTypeName(gt_ids.type()));
   }
   const SimulatedSegmenterOptions o = options.Effective();
-  const cv::Size size = gt_ids.size();
-  const double image_area = static_cast<double>(size.area());
 
-  SimulatedFrame result;
-  result.segmentation.frame_index = frame_index;
   std::vector<InstanceMask> outputs;
-  std::vector<std::uint16_t> sources;
-
+  std::vector<std::uint16_t> sources;  // ground-truth id of each output; 0: a false positive
   const std::vector<GtInstance> frame_instances = AnalyseIds(gt_ids);
-  const std::vector<int> sequence_categories = SequenceCategories(table);
-  // Pixels per category in view: confusions go towards look-alikes in view.
-  std::map<int, double> frame_category_pixels;
-  for (const GtInstance& gt : frame_instances) {
-    const InstanceInfo* info = table.Find(gt.id);
-    if (info != nullptr) frame_category_pixels[info->category_id] += gt.area;
-  }
-  std::vector<int> frame_categories;
-  for (const auto& [category, pixels] : frame_category_pixels) frame_categories.push_back(category);
+  const CategoriesInView in_view = CountCategoriesInView(frame_instances, table);
   for (const GtInstance& gt : frame_instances) {
     const InstanceInfo* info = table.Find(gt.id);
     if (info == nullptr) {
@@ -524,200 +785,16 @@ SimulatedFrame SimulateSegmentation(const SimulatedSegmenterOptions& options, st
     const auto found = context.find(gt.id);
     const SimulatedInstanceContext ctx =
         found == context.end() ? SimulatedInstanceContext{} : found->second;
-    const double sqrt_area = std::sqrt(static_cast<double>(gt.area));
-
-    // Persistent difficulty of this instance (the same in every frame).
-    Rng difficulty_rng(seed, -1, gt.id, kStreamDifficulty);
-    const double difficulty = o.difficulty_sd * difficulty_rng.Normal() +
-                              (IsHardCategory(info->category_id) ? o.hard_category_difficulty : 0.0);
-    const double magnitude = std::exp(0.5 * difficulty);
-
-    // Missed? A fresh draw per frame: flicker.
-    if (gt.area < o.min_area_px) continue;
-    const double small_share =
-        o.small_area_fraction > 0
-            ? std::max(0.0, 1.0 - gt.area / (o.small_area_fraction * image_area))
-            : 0.0;
-    const double large_relief =
-        o.truncated_large_area_fraction > 0
-            ? std::max(0.0, 1.0 - gt.area / (o.truncated_large_area_fraction * image_area))
-            : 1.0;
-    const double truncation = std::min(1.0, gt.border_pixels / std::max(1.0, sqrt_area)) * large_relief;
-    const double occlusion = 1.0 - std::clamp(ctx.visible_share, 0.0, 1.0);
-    double p_miss = o.miss_prob + o.miss_small_prob * small_share +
-                    o.miss_truncated_prob * truncation + o.miss_occluded_prob * occlusion +
-                    (ctx.moving ? o.miss_moving_prob * MotionBlurShare(ctx, o) : 0.0);
-    p_miss = std::clamp(p_miss, 0.0, 1.0);
-    if (p_miss > 0 && p_miss < 1) p_miss = Logistic(Logit(p_miss) + difficulty);
-    Rng miss_rng(seed, frame_index, gt.id, kStreamMiss);
-    if (miss_rng.Bernoulli(p_miss)) continue;
-
-    // Work in the bounding box grown by the largest outward change.
-    const double bleed_px = o.bleed_fraction_max * sqrt_area * magnitude;
-    const double blob_px = o.bleed_blob_prob > 0 ? 6.0 * std::max(bleed_px, 1.0) : 0.0;
-    const double jitter_px =
-        std::min(o.boundary_jitter_px, o.boundary_jitter_fraction * sqrt_area) * magnitude;
-    const double jitter_scale_px = std::max(2.0, o.boundary_jitter_scale_fraction * sqrt_area);
-    const double neighbour_reach_px = o.neighbour_bleed_fraction_max * sqrt_area * magnitude;
-    const int pad = static_cast<int>(std::ceil(std::max({bleed_px, blob_px, neighbour_reach_px}) +
-                                               2.0 * jitter_px)) + 2;
-    const cv::Rect box = cv::Rect(gt.x0 - pad, gt.y0 - pad, gt.x1 - gt.x0 + 1 + 2 * pad,
-                                  gt.y1 - gt.y0 + 1 + 2 * pad) &
-                         cv::Rect(0, 0, size.width, size.height);
-    cv::Mat truth;
-    cv::compare(gt_ids(box), gt.id, truth, cv::CMP_EQ);
-    truth /= 255;
-    cv::Mat mask = truth.clone();
-    const cv::Point gt_origin(gt.x0 - box.x, gt.y0 - box.y);
-    const cv::Size gt_size(gt.x1 - gt.x0 + 1, gt.y1 - gt.y0 + 1);
-
-    // The mask head's fixed resolution.
-    if (o.mask_resolution > 0) CoarsenToGrid(cv::Rect(gt_origin, gt_size), o.mask_resolution, &mask);
-
-    // Missing parts: holes.
-    Rng holes_rng(seed, frame_index, gt.id, kStreamHoles);
-    if (holes_rng.Bernoulli(o.hole_prob)) {
-      const int holes = holes_rng.UniformInt(1, o.hole_count_max);
-      for (int h = 0; h < holes; ++h) {
-        const cv::Point centre = RandomPixelOf(&holes_rng, truth, gt.area);
-        const double radius =
-            holes_rng.Uniform(0.3, 1.0) * o.hole_radius_fraction * sqrt_area * magnitude;
-        cv::circle(mask, centre, static_cast<int>(std::lround(radius)), 0, cv::FILLED);
-      }
-    }
-    // Missing parts: a cut-off side.
-    Rng cut_rng(seed, frame_index, gt.id, kStreamCut);
-    if (cut_rng.Bernoulli(o.cut_prob)) {
-      const double fraction =
-          std::min(0.9, cut_rng.Uniform(0.2, 1.0) * o.cut_fraction_max * magnitude);
-      const int side = cut_rng.UniformInt(0, 3);
-      const int cut_w = static_cast<int>(std::lround(fraction * gt_size.width));
-      const int cut_h = static_cast<int>(std::lround(fraction * gt_size.height));
-      cv::Rect cut;
-      if (side == 0) cut = cv::Rect(gt_origin.x, gt_origin.y, cut_w, gt_size.height);  // left
-      if (side == 1) cut = cv::Rect(gt_origin.x + gt_size.width - cut_w, gt_origin.y, cut_w, gt_size.height);
-      if (side == 2) cut = cv::Rect(gt_origin.x, gt_origin.y, gt_size.width, cut_h);  // top
-      if (side == 3) cut = cv::Rect(gt_origin.x, gt_origin.y + gt_size.height - cut_h, gt_size.width, cut_h);
-      mask(cut & cv::Rect(0, 0, box.width, box.height)).setTo(0);
-    }
-    // Oversized: bleeding outward, and sometimes a blob on one side.
-    Rng bleed_rng(seed, frame_index, gt.id, kStreamBleed);
-    if (bleed_rng.Bernoulli(o.bleed_prob)) {
-      const int radius = static_cast<int>(std::lround(bleed_rng.Uniform(0.3, 1.0) * bleed_px));
-      if (radius > 0) {
-        const cv::Mat kernel =
-            cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * radius + 1, 2 * radius + 1));
-        cv::dilate(mask, mask, kernel);
-      }
-      if (bleed_rng.Bernoulli(o.bleed_blob_prob)) {
-        const cv::Point centre = RandomPixelOf(&bleed_rng, truth, gt.area);
-        const double angle = bleed_rng.Uniform(0, 2 * M_PI);
-        const double reach = bleed_rng.Uniform(1.0, 3.0) * std::max(bleed_px, 1.0);
-        const cv::Point shifted(centre.x + static_cast<int>(std::lround(reach * std::cos(angle))),
-                                centre.y + static_cast<int>(std::lround(reach * std::sin(angle))));
-        const int axis = static_cast<int>(std::lround(std::max(2.0, reach)));
-        cv::ellipse(mask, shifted, cv::Size(axis, std::max(1, axis / 2)), angle * 180 / M_PI, 0,
-                    360, 1, cv::FILLED);
-      }
-    }
-    // Oversized: spread into touching instances.
-    Rng neighbour_rng(seed, frame_index, gt.id, kStreamNeighbourBleed);
-    if (neighbour_rng.Bernoulli(o.neighbour_bleed_prob)) {
-      const int radius = static_cast<int>(
-          std::lround(neighbour_rng.Uniform(1.0 / 3.0, 1.0) * neighbour_reach_px));
-      if (radius > 0) {
-        const cv::Mat others = (gt_ids(box) != 0) & (gt_ids(box) != gt.id);  // 0/255
-        cv::Mat reach;
-        const cv::Mat kernel =
-            cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * radius + 1, 2 * radius + 1));
-        cv::dilate(truth, reach, kernel);
-        mask |= reach & (others / 255);
-      }
-    }
-    // Jittered boundary.
-    Rng jitter_rng(seed, frame_index, gt.id, kStreamJitter);
-    JitterBoundary(&jitter_rng, jitter_px, jitter_scale_px, &mask);
-
-    const int produced = cv::countNonZero(mask);
-    if (produced == 0) continue;
-    const int intersection = cv::countNonZero(mask & truth);
-    const double iou = intersection / static_cast<double>(gt.area + produced - intersection);
-
-    // Class confusion, towards a look-alike in view (the same one while the choice stays).
-    int category = info->category_id;
-    Rng confusion_rng(seed, frame_index, gt.id, kStreamConfusion);
-    const std::vector<int> look_alikes = LookAlikes(category, frame_categories);
-    if (!look_alikes.empty()) {
-      Rng target_rng(seed, -1, gt.id, kStreamConfusionTarget);
-      const int target =
-          look_alikes[target_rng.UniformInt(0, static_cast<int>(look_alikes.size()) - 1)];
-      // Networks lean towards the class seen more: a rare class is taken for a common
-      // look-alike at the full rate, a common one for a rare look-alike seldom.
-      const double own = frame_category_pixels[category];
-      const double other = frame_category_pixels[target];
-      const double lean = std::min(1.0, 2.0 * other / (own + other));
-      if (confusion_rng.Bernoulli(o.confusion_prob * lean)) category = target;
-    }
-
-    // Score from quality.
-    Rng score_rng(seed, frame_index, gt.id, kStreamScore);
-    double score = 1.0 - o.score_iou_weight * (1.0 - iou) + o.score_noise_sd * score_rng.Normal();
-    if (category != info->category_id) score *= o.confusion_score_factor;
-
-    InstanceMask out;
-    out.category_id = category;
-    out.score = Clamp01(score, 0.01);
-    out.mask = cv::Mat::zeros(size, CV_8U);
-    mask.copyTo(out.mask(box));
-    outputs.push_back(std::move(out));
+    std::optional<InstanceMask> out =
+        SimulateInstance(o, seed, frame_index, gt_ids, gt, *info, ctx, in_view);
+    if (!out) continue;
+    outputs.push_back(std::move(*out));
     sources.push_back(gt.id);
   }
-
-  // False positives: blobs on the background, mostly low-scored.
-  Rng fp_rng(seed, frame_index, 0, kStreamFalsePositives);
-  const int false_positives = fp_rng.Poisson(o.false_positives_per_frame);
-  if (false_positives > 0) {
-    cv::Mat background;
-    cv::compare(gt_ids, 0, background, cv::CMP_EQ);
-    background /= 255;
-    for (int k = 0; k < false_positives; ++k) {
-      // Like an object in view: the class and (scaled) size of a random ground-truth
-      // instance of the frame, else of a random class of the sequence at the size range.
-      int category = 0;
-      double area = 0;
-      if (!frame_instances.empty()) {
-        const GtInstance& like =
-            frame_instances[fp_rng.UniformInt(0, static_cast<int>(frame_instances.size()) - 1)];
-        category = table.Find(like.id)->category_id;
-        area = std::clamp(like.area * std::exp(fp_rng.Uniform(std::log(0.3), std::log(2.0))),
-                          o.false_positive_area_min * image_area,
-                          o.false_positive_area_max * image_area);
-      } else {
-        category = sequence_categories[fp_rng.UniformInt(
-            0, static_cast<int>(sequence_categories.size()) - 1)];
-        area = image_area * std::exp(fp_rng.Uniform(std::log(o.false_positive_area_min),
-                                                    std::log(o.false_positive_area_max)));
-      }
-      const double aspect = std::exp(fp_rng.Uniform(std::log(0.4), std::log(2.5)));
-      const int a = std::max(1, static_cast<int>(std::lround(std::sqrt(area * aspect / M_PI))));
-      const int b = std::max(1, static_cast<int>(std::lround(std::sqrt(area / aspect / M_PI))));
-      const cv::Point centre(fp_rng.UniformInt(0, size.width - 1), fp_rng.UniformInt(0, size.height - 1));
-      const double angle = fp_rng.Uniform(0, 180);
-      const double score = fp_rng.Uniform(0.01, o.false_positive_score_max);
-      cv::Mat blob = cv::Mat::zeros(size, CV_8U);
-      cv::ellipse(blob, centre, cv::Size(a, b), angle, 0, 360, 1, cv::FILLED);
-      const double fp_sqrt_area = std::sqrt(area);
-      JitterBoundary(&fp_rng, std::min(o.boundary_jitter_px, o.boundary_jitter_fraction * fp_sqrt_area),
-                     std::max(2.0, o.boundary_jitter_scale_fraction * fp_sqrt_area), &blob);
-      blob &= background;
-      if (cv::countNonZero(blob) < std::max(20, o.min_area_px)) continue;
-      InstanceMask out;
-      out.category_id = category;
-      out.score = Clamp01(score, 0.01);
-      out.mask = std::move(blob);
-      outputs.push_back(std::move(out));
-      sources.push_back(0);
-    }
+  for (InstanceMask& blob :
+       SimulateFalsePositives(o, seed, frame_index, gt_ids, frame_instances, table)) {
+    outputs.push_back(std::move(blob));
+    sources.push_back(0);
   }
 
   // Number the outputs 1..N in a seeded per-frame order, so ids carry no ground truth.
@@ -727,6 +804,8 @@ SimulatedFrame SimulateSegmentation(const SimulatedSegmenterOptions& options, st
   for (size_t i = order.size(); i > 1; --i) {
     std::swap(order[i - 1], order[static_cast<size_t>(order_rng.UniformInt(0, static_cast<int>(i) - 1))]);
   }
+  SimulatedFrame result;
+  result.segmentation.frame_index = frame_index;
   for (size_t rank = 0; rank < order.size(); ++rank) {
     InstanceMask& out = outputs[order[rank]];
     out.track_id = static_cast<std::uint16_t>(rank + 1);
