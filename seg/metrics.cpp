@@ -108,117 +108,134 @@ double AveragePrecisionAt(const std::vector<ScoredDetection>& sorted, int num_gt
   return sum / kNumRecallThresholds;
 }
 
-FrameContribution ScoreFrameContribution(const EvaluationOptions& options, const cv::Mat& gt_ids,
-                                         const InstanceTable& gt_instances,
-                                         const FrameSegmentation& prediction) {
-  CheckFrame(gt_ids, prediction);
-  FrameContribution frame;
+// The ground-truth instances of a frame: the ids present in the image, ascending
+// (pycocotools keeps annotation order; ids are segslam's stable order), each with its
+// category and area, and lookups by id.
+struct FrameGroundTruth {
+  std::vector<GroundTruthInstance> instances;
+  std::vector<int> index_of_id = std::vector<int>(kNumIds, -1);
+  std::vector<int> category_of_id = std::vector<int>(kNumIds, 0);  // 0 = background.
+};
 
-  // Ground truth: the ids present in the image, ascending (pycocotools keeps annotation
-  // order; ids are segslam's stable order), each with its category and area.
+FrameGroundTruth CollectGroundTruth(const cv::Mat& gt_ids, const InstanceTable& gt_instances,
+                                    int frame_index) {
   std::vector<std::int64_t> area_of_id(kNumIds, 0);
   for (int row = 0; row < gt_ids.rows; ++row) {
     const std::uint16_t* ids = gt_ids.ptr<std::uint16_t>(row);
     for (int col = 0; col < gt_ids.cols; ++col) ++area_of_id[ids[col]];
   }
-  std::vector<GroundTruthInstance> gt;
-  std::vector<int> gt_index_of_id(kNumIds, -1);
-  std::vector<int> category_of_id(kNumIds, 0);  // 0 = background.
+  FrameGroundTruth gt;
   for (int id = 1; id < kNumIds; ++id) {
     if (area_of_id[id] == 0) continue;
     const InstanceInfo* info = gt_instances.Find(static_cast<std::uint16_t>(id));
     if (info == nullptr) {
-      throw Error("segmentation metrics: frame " + std::to_string(prediction.frame_index) +
+      throw Error("segmentation metrics: frame " + std::to_string(frame_index) +
                   ": ground-truth id " + std::to_string(id) + " is not in the instance table");
     }
-    gt_index_of_id[id] = static_cast<int>(gt.size());
-    category_of_id[id] = info->category_id;
-    gt.push_back({static_cast<std::uint16_t>(id), info->category_id, area_of_id[id]});
+    gt.index_of_id[id] = static_cast<int>(gt.instances.size());
+    gt.category_of_id[id] = info->category_id;
+    gt.instances.push_back({static_cast<std::uint16_t>(id), info->category_id, area_of_id[id]});
   }
-  frame.gt_instances = static_cast<int>(gt.size());
+  return gt;
+}
 
-  // Per detection: its area and its intersection with every ground-truth instance (the
-  // ground truth is a label image, so one pass over the mask gives all intersections).
-  const size_t num_detections = prediction.instances.size();
-  std::vector<std::int64_t> detection_area(num_detections, 0);
-  std::vector<cv::Rect> detection_box(num_detections);
-  std::vector<std::vector<std::int64_t>> intersection(
-      num_detections, std::vector<std::int64_t>(gt.size(), 0));
-  for (size_t d = 0; d < num_detections; ++d) {
-    const cv::Mat& mask = prediction.instances[d].mask;
-    // A detection covers a small part of the frame: scanning its box, not the frame.
-    const cv::Rect box = cv::boundingRect(mask);
-    detection_box[d] = box;
-    for (int row = box.y; row < box.y + box.height; ++row) {
-      const std::uint8_t* inside = mask.ptr<std::uint8_t>(row);
-      const std::uint16_t* ids = gt_ids.ptr<std::uint16_t>(row);
-      for (int col = box.x; col < box.x + box.width; ++col) {
-        if (inside[col] == 0) continue;
-        ++detection_area[d];
-        if (ids[col] != 0) ++intersection[d][gt_index_of_id[ids[col]]];
-      }
-    }
-  }
-  const auto iou = [&](size_t d, size_t g) {
-    const std::int64_t overlap = intersection[d][g];
-    const std::int64_t union_area = detection_area[d] + gt[g].area - overlap;  // > 0: area > 0.
-    return static_cast<double>(overlap) / static_cast<double>(union_area);
-  };
-
-  // The categories present on either side.
-  std::set<int> categories;
-  for (const GroundTruthInstance& instance : gt) categories.insert(instance.category_id);
-  for (const InstanceMask& instance : prediction.instances) categories.insert(instance.category_id);
-
-  const std::vector<size_t> by_score = StableOrderByDescendingScore(
-      num_detections, [&](size_t i) { return prediction.instances[i].score; });
-  const std::array<double, 10>& thresholds = CocoIouThresholds();
-  for (int category : categories) {
-    std::vector<size_t> category_gt;  // Ascending id.
-    for (size_t g = 0; g < gt.size(); ++g) {
-      if (gt[g].category_id == category) category_gt.push_back(g);
-    }
-    // Step 1: this category's detections by score, capped.
-    std::vector<size_t> category_detections;
-    for (size_t d : by_score) {
-      if (prediction.instances[d].category_id != category) continue;
-      if (static_cast<int>(category_detections.size()) == options.max_detections_per_frame) break;
-      category_detections.push_back(d);
-    }
-
-    CategoryMatches& matches = frame.matches[category];
-    matches.num_gt = static_cast<int>(category_gt.size());
-    matches.detections.resize(category_detections.size());
-    for (size_t k = 0; k < category_detections.size(); ++k) {
-      matches.detections[k].score = prediction.instances[category_detections[k]].score;
-    }
-    // Step 2: greedy matching at each threshold, as COCOeval.evaluateImg.
-    for (size_t t = 0; t < thresholds.size(); ++t) {
-      std::vector<bool> gt_taken(category_gt.size(), false);
-      for (size_t k = 0; k < category_detections.size(); ++k) {
-        double best_iou = thresholds[t];
-        int best = -1;
-        for (size_t j = 0; j < category_gt.size(); ++j) {
-          if (gt_taken[j]) continue;
-          const double value = iou(category_detections[k], category_gt[j]);
-          if (value < best_iou) continue;  // Equal IoU: the later instance replaces.
-          best_iou = value;
-          best = static_cast<int>(j);
+// Per detection: its area, its bounding box and its intersection with every ground-truth
+// instance (the ground truth is a label image, so one pass over the mask gives all
+// intersections).
+struct DetectionOverlaps {
+  DetectionOverlaps(const FrameSegmentation& prediction, const cv::Mat& gt_ids,
+                    const FrameGroundTruth& gt)
+      : gt_(gt) {
+    const size_t count = prediction.instances.size();
+    area.assign(count, 0);
+    box.resize(count);
+    intersection.assign(count, std::vector<std::int64_t>(gt.instances.size(), 0));
+    for (size_t d = 0; d < count; ++d) {
+      const cv::Mat& mask = prediction.instances[d].mask;
+      // A detection covers a small part of the frame: scanning its box, not the frame.
+      box[d] = cv::boundingRect(mask);
+      for (int row = box[d].y; row < box[d].br().y; ++row) {
+        const std::uint8_t* inside = mask.ptr<std::uint8_t>(row);
+        const std::uint16_t* ids = gt_ids.ptr<std::uint16_t>(row);
+        for (int col = box[d].x; col < box[d].br().x; ++col) {
+          if (inside[col] == 0) continue;
+          ++area[d];
+          if (ids[col] != 0) ++intersection[d][gt.index_of_id[ids[col]]];
         }
-        if (best < 0) continue;  // A false positive at this threshold.
-        gt_taken[best] = true;
-        matches.detections[k].matched |= static_cast<std::uint16_t>(1u << t);
       }
     }
-    frame.detections += static_cast<int>(category_detections.size());
   }
 
-  // mIoU: the predicted class of every pixel, painted from the lowest score up so the
-  // highest score wins overlaps (ToIdImage's rule, painting categories instead of track
-  // ids so that equal track ids of different detections cannot mix classes).
+  // IoU of detection d and ground-truth instance g.
+  double IoU(size_t d, size_t g) const {
+    const std::int64_t overlap = intersection[d][g];
+    const std::int64_t union_area = area[d] + gt_.instances[g].area - overlap;  // > 0: area > 0.
+    return static_cast<double>(overlap) / static_cast<double>(union_area);
+  }
+
+  std::vector<std::int64_t> area;
+  std::vector<cv::Rect> box;
+  std::vector<std::vector<std::int64_t>> intersection;
+
+ private:
+  const FrameGroundTruth& gt_;
+};
+
+// Steps 1 and 2 of the header for one category: its detections by score, capped, each
+// matched greedily to its ground truth at every IoU threshold, as COCOeval.evaluateImg.
+CategoryMatches MatchCategory(const EvaluationOptions& options, int category,
+                              const FrameGroundTruth& gt, const FrameSegmentation& prediction,
+                              const std::vector<size_t>& by_score,
+                              const DetectionOverlaps& overlaps) {
+  std::vector<size_t> category_gt;  // Ascending id.
+  for (size_t g = 0; g < gt.instances.size(); ++g) {
+    if (gt.instances[g].category_id == category) category_gt.push_back(g);
+  }
+  std::vector<size_t> category_detections;
+  for (size_t d : by_score) {
+    if (prediction.instances[d].category_id != category) continue;
+    if (static_cast<int>(category_detections.size()) == options.max_detections_per_frame) break;
+    category_detections.push_back(d);
+  }
+
+  CategoryMatches matches;
+  matches.num_gt = static_cast<int>(category_gt.size());
+  matches.detections.resize(category_detections.size());
+  for (size_t k = 0; k < category_detections.size(); ++k) {
+    matches.detections[k].score = prediction.instances[category_detections[k]].score;
+  }
+  const std::array<double, 10>& thresholds = CocoIouThresholds();
+  for (size_t t = 0; t < thresholds.size(); ++t) {
+    std::vector<bool> gt_taken(category_gt.size(), false);
+    for (size_t k = 0; k < category_detections.size(); ++k) {
+      double best_iou = thresholds[t];
+      int best = -1;
+      for (size_t j = 0; j < category_gt.size(); ++j) {
+        if (gt_taken[j]) continue;
+        const double value = overlaps.IoU(category_detections[k], category_gt[j]);
+        if (value < best_iou) continue;  // Equal IoU: the later instance replaces.
+        best_iou = value;
+        best = static_cast<int>(j);
+      }
+      if (best < 0) continue;  // A false positive at this threshold.
+      gt_taken[best] = true;
+      matches.detections[k].matched |= static_cast<std::uint16_t>(1u << t);
+    }
+  }
+  return matches;
+}
+
+// For mIoU: the true positive, false positive and false negative pixels of each category
+// that has any. The predicted class of every pixel is painted from the lowest score up so
+// the highest score wins overlaps (ToIdImage's rule, painting categories instead of track
+// ids so that equal track ids of different detections cannot mix classes).
+std::map<int, PixelCounts> CountClassPixels(const cv::Mat& gt_ids, const FrameGroundTruth& gt,
+                                            const FrameSegmentation& prediction,
+                                            const std::vector<cv::Rect>& detection_box,
+                                            const std::set<int>& categories) {
   cv::Mat predicted_class(gt_ids.size(), CV_16U, cv::Scalar(0));
   // Ascending score, stably: on equal scores the later instance is painted last and wins.
-  std::vector<size_t> paint_order(num_detections);
+  std::vector<size_t> paint_order(prediction.instances.size());
   std::iota(paint_order.begin(), paint_order.end(), 0);
   std::stable_sort(paint_order.begin(), paint_order.end(), [&](size_t a, size_t b) {
     return prediction.instances[a].score < prediction.instances[b].score;
@@ -236,7 +253,7 @@ FrameContribution ScoreFrameContribution(const EvaluationOptions& options, const
     const std::uint16_t* ids = gt_ids.ptr<std::uint16_t>(row);
     const std::uint16_t* predicted = predicted_class.ptr<std::uint16_t>(row);
     for (int col = 0; col < gt_ids.cols; ++col) {
-      const int truth = category_of_id[ids[col]];
+      const int truth = gt.category_of_id[ids[col]];
       const int guess = predicted[col];
       if (truth == guess) {
         if (truth != 0) ++pixels[static_cast<size_t>(truth)].true_positive;
@@ -246,10 +263,38 @@ FrameContribution ScoreFrameContribution(const EvaluationOptions& options, const
       if (guess != 0) ++pixels[static_cast<size_t>(guess)].false_positive;
     }
   }
+  std::map<int, PixelCounts> counts_by_category;
   for (const int category : categories) {
     const PixelCounts& counts = pixels[static_cast<size_t>(category)];
-    if (counts.true_positive + counts.false_positive + counts.false_negative > 0) frame.pixels[category] = counts;
+    if (counts.true_positive + counts.false_positive + counts.false_negative > 0) {
+      counts_by_category[category] = counts;
+    }
   }
+  return counts_by_category;
+}
+
+FrameContribution ScoreFrameContribution(const EvaluationOptions& options, const cv::Mat& gt_ids,
+                                         const InstanceTable& gt_instances,
+                                         const FrameSegmentation& prediction) {
+  CheckFrame(gt_ids, prediction);
+  const FrameGroundTruth gt = CollectGroundTruth(gt_ids, gt_instances, prediction.frame_index);
+  const DetectionOverlaps overlaps(prediction, gt_ids, gt);
+
+  // The categories present on either side.
+  std::set<int> categories;
+  for (const GroundTruthInstance& instance : gt.instances) categories.insert(instance.category_id);
+  for (const InstanceMask& instance : prediction.instances) categories.insert(instance.category_id);
+
+  FrameContribution frame;
+  frame.gt_instances = static_cast<int>(gt.instances.size());
+  const std::vector<size_t> by_score = StableOrderByDescendingScore(
+      prediction.instances.size(), [&](size_t i) { return prediction.instances[i].score; });
+  for (int category : categories) {
+    CategoryMatches& matches = frame.matches[category];
+    matches = MatchCategory(options, category, gt, prediction, by_score, overlaps);
+    frame.detections += static_cast<int>(matches.detections.size());
+  }
+  frame.pixels = CountClassPixels(gt_ids, gt, prediction, overlaps.box, categories);
   return frame;
 }
 
