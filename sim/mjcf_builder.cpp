@@ -120,123 +120,138 @@ void CheckWorld(const scenes::World& world) {
   }
 }
 
-}  // namespace
-
-std::string TextureName(int texture_index) { return fmt::format("tex{}", texture_index); }
-std::string PartBodyName(int object_index, int part_index) {
-  return fmt::format("obj{}_part{}", object_index, part_index);
+// One MJCF <material>; texrepeat: texture copies across the geom (see BuildMjcf).
+std::string MaterialXml(const std::string& name, const scenes::Material& mat,
+                        const Eigen::Vector2d& texrepeat) {
+  std::string tex;
+  if (mat.texture >= 0) {
+    tex = fmt::format(" texture=\"{}\" texrepeat=\"{} {}\" texuniform=\"false\"",
+                      TextureName(mat.texture), Num(texrepeat.x()), Num(texrepeat.y()));
+  }
+  return fmt::format(
+      "    <material name=\"{}\"{} rgba=\"{} {} {} {}\" specular=\"{}\" shininess=\"{}\" "
+      "reflectance=\"0\" emission=\"0\"/>\n",
+      name, tex, Num(mat.rgba[0]), Num(mat.rgba[1]), Num(mat.rgba[2]), Num(mat.rgba[3]),
+      Num(mat.specular), Num(mat.shininess));
 }
 
-MjcfModel BuildMjcf(const scenes::World& world, const MjcfOptions& options) {
-  CheckWorld(world);
-  MjcfModel out;
-  const scenes::CameraSpec& cam = world.camera;
-  std::ostringstream assets;  // textures, materials, meshes
-  std::ostringstream body;    // worldbody content
-
-  for (size_t i = 0; i < world.textures.size(); ++i) {
-    const cv::Mat& img = world.textures[i].image_bgr;
-    out.texture_names.push_back(TextureName(static_cast<int>(i)));
-    assets << fmt::format(
-        "    <texture name=\"{}\" type=\"2d\" builtin=\"flat\" width=\"{}\" height=\"{}\" "
-        "rgb1=\"1 1 1\" rgb2=\"1 1 1\"/>\n",
-        out.texture_names.back(), img.cols, img.rows);
+// The size attribute of a geom, in MJCF's per-type layout.
+std::string GeomSize(const scenes::Geom& g) {
+  switch (g.shape) {
+    case scenes::Shape::kBox:
+    case scenes::Shape::kEllipsoid: return Vec3(g.size);
+    case scenes::Shape::kCylinder:
+    case scenes::Shape::kCapsule: return Num(g.size.x()) + " " + Num(g.size.y());
+    case scenes::Shape::kSphere: return Num(g.size.x());
+    case scenes::Shape::kPlane:
+      // Third value: spacing of the grid MuJoCo draws the plane with (metres).
+      return Num(g.size.x()) + " " + Num(g.size.y()) + " 1";
   }
-  // One MJCF material per world material (boxes as meshes carry their own texture
-  // coordinates, so texrepeat is 1); textured planes get their own material below.
-  auto material_xml = [&](const std::string& name, const scenes::Material& mat,
-                          const Eigen::Vector2d& texrepeat) {
-    std::string tex;
-    if (mat.texture >= 0) {
-      tex = fmt::format(" texture=\"{}\" texrepeat=\"{} {}\" texuniform=\"false\"",
-                        TextureName(mat.texture), Num(texrepeat.x()), Num(texrepeat.y()));
+  return Vec3(g.size);
+}
+
+// The <asset> section, which grows as geoms are written: a textured box becomes a mesh
+// with texture coordinates of its own, a textured plane a material with its own repeat.
+class AssetSection {
+ public:
+  explicit AssetSection(const scenes::World& world) : world_(world) {}
+
+  // One texture per world texture (its pixels are uploaded by the renderer); returns
+  // their names.
+  std::vector<std::string> AddTextures() {
+    std::vector<std::string> names;
+    for (size_t i = 0; i < world_.textures.size(); ++i) {
+      const cv::Mat& img = world_.textures[i].image_bgr;
+      names.push_back(TextureName(static_cast<int>(i)));
+      xml_ << fmt::format(
+          "    <texture name=\"{}\" type=\"2d\" builtin=\"flat\" width=\"{}\" height=\"{}\" "
+          "rgb1=\"1 1 1\" rgb2=\"1 1 1\"/>\n",
+          names.back(), img.cols, img.rows);
     }
-    return fmt::format(
-        "    <material name=\"{}\"{} rgba=\"{} {} {} {}\" specular=\"{}\" shininess=\"{}\" "
-        "reflectance=\"0\" emission=\"0\"/>\n",
-        name, tex, Num(mat.rgba[0]), Num(mat.rgba[1]), Num(mat.rgba[2]), Num(mat.rgba[3]),
-        Num(mat.specular), Num(mat.shininess));
-  };
-  for (size_t i = 0; i < world.materials.size(); ++i) {
-    assets << material_xml(fmt::format("mat{}", i), world.materials[i], Eigen::Vector2d(1, 1));
+    return names;
   }
 
-  int geom_counter = 0;
-  auto geom_xml = [&](const scenes::Geom& g, const std::string& indent) {
-    const int id = geom_counter++;
-    if (g.material < 0 || g.material >= static_cast<int>(world.materials.size())) {
+  // One material per world material, texrepeat 1: boxes as meshes carry their own
+  // texture coordinates.
+  void AddMaterials() {
+    for (size_t i = 0; i < world_.materials.size(); ++i) {
+      xml_ << MaterialXml(fmt::format("mat{}", i), world_.materials[i], Eigen::Vector2d(1, 1));
+    }
+  }
+
+  // A <geom> element, adding what it needs to the assets.
+  std::string Geom(const scenes::Geom& g, const std::string& indent) {
+    const int id = geom_count_++;
+    if (g.material < 0 || g.material >= static_cast<int>(world_.materials.size())) {
       throw Error(fmt::format("world '{}': geom {} has material index {} out of range",
-                              world.name, id, g.material));
+                              world_.name, id, g.material));
     }
-    const scenes::Material& mat = world.materials[g.material];
+    const scenes::Material& mat = world_.materials[g.material];
     const bool textured = mat.texture >= 0;
     const std::string pose = PoseAttributes(g.T_parent_geom);
     if (textured && g.shape == scenes::Shape::kBox) {
       const std::string mesh = fmt::format("box{}", id);
-      assets << BoxMeshAsset(mesh, g.size, world.textures[mat.texture].tile_size_m);
+      xml_ << BoxMeshAsset(mesh, g.size, world_.textures[mat.texture].tile_size_m);
       return fmt::format("{}<geom type=\"mesh\" mesh=\"{}\" material=\"mat{}\" {}/>\n", indent,
                          mesh, g.material, pose);
     }
     std::string material = fmt::format("mat{}", g.material);
     if (textured && g.shape == scenes::Shape::kPlane) {
-      const Eigen::Vector2d& tile = world.textures[mat.texture].tile_size_m;
+      const Eigen::Vector2d& tile = world_.textures[mat.texture].tile_size_m;
       material = fmt::format("mat{}_plane{}", g.material, id);
-      assets << material_xml(material, mat,
-                             Eigen::Vector2d(2 * g.size.x() / tile.x(),
-                                             2 * g.size.y() / tile.y()));
-    }
-    std::string size;
-    switch (g.shape) {
-      case scenes::Shape::kBox:
-      case scenes::Shape::kEllipsoid: size = Vec3(g.size); break;
-      case scenes::Shape::kCylinder:
-      case scenes::Shape::kCapsule: size = Num(g.size.x()) + " " + Num(g.size.y()); break;
-      case scenes::Shape::kSphere: size = Num(g.size.x()); break;
-      case scenes::Shape::kPlane:
-        // Third value: spacing of the grid MuJoCo draws the plane with (metres).
-        size = Num(g.size.x()) + " " + Num(g.size.y()) + " 1";
-        break;
+      xml_ << MaterialXml(material, mat,
+                          Eigen::Vector2d(2 * g.size.x() / tile.x(), 2 * g.size.y() / tile.y()));
     }
     return fmt::format("{}<geom type=\"{}\" size=\"{}\" material=\"{}\" {}/>\n", indent,
-                       ShapeName(g.shape), size, material, pose);
-  };
+                       ShapeName(g.shape), GeomSize(g), material, pose);
+  }
 
-  for (const scenes::Geom& g : world.static_geoms) body << geom_xml(g, "    ");
-  out.part_bodies.resize(world.objects.size());
+  std::string Xml() const { return "  <asset>\n" + xml_.str() + "  </asset>\n"; }
+
+ private:
+  const scenes::World& world_;
+  std::ostringstream xml_;
+  int geom_count_ = 0;
+};
+
+// A mocap body per object part, named by PartBodyName, each holding its geoms. They start
+// far below the ground; the renderer poses (or hides) every part per frame.
+std::string ObjectBodies(const scenes::World& world, AssetSection* assets,
+                         std::vector<std::vector<std::string>>* part_bodies) {
+  std::ostringstream body;
+  part_bodies->assign(world.objects.size(), {});
   for (size_t k = 0; k < world.objects.size(); ++k) {
     const scenes::Object& obj = world.objects[k];
     for (size_t j = 0; j < obj.parts.size(); ++j) {
       const std::string name = PartBodyName(static_cast<int>(k), static_cast<int>(j));
-      out.part_bodies[k].push_back(name);
-      // Start far below the ground; the renderer poses (or hides) every part per frame.
+      (*part_bodies)[k].push_back(name);
       body << fmt::format("    <body name=\"{}\" mocap=\"true\" pos=\"0 0 -1e4\">\n", name);
-      for (const scenes::Geom& g : obj.parts[j].geoms) body << geom_xml(g, "      ");
+      for (const scenes::Geom& g : obj.parts[j].geoms) body << assets->Geom(g, "      ");
       body << "    </body>\n";
     }
   }
-  out.camera_body = "segslam_camera";
-  out.camera = "segslam_camera";
-  // The optical frame (x right, y down, z forward) is MuJoCo's camera frame (looking
-  // along -z, y up) rotated 180 deg about x: quaternion (w x y z) = (0 1 0 0).
-  body << fmt::format(
-      "    <body name=\"{}\" mocap=\"true\">\n"
-      "      <camera name=\"{}\" fovy=\"{}\" pos=\"0 0 0\" quat=\"0 1 0 0\"/>\n"
-      "    </body>\n",
-      out.camera_body, out.camera, Num(cam.fovy_deg));
+  return body.str();
+}
 
-  std::ostringstream lights;
-  for (const scenes::Light& l : world.lights) {
-    lights << fmt::format(
+std::string LightsXml(const std::vector<scenes::Light>& lights, const MjcfOptions& options) {
+  std::ostringstream xml;
+  for (const scenes::Light& l : lights) {
+    xml << fmt::format(
         "    <light directional=\"{}\" pos=\"{}\" dir=\"{}\" diffuse=\"{}\" ambient=\"{}\" "
         "specular=\"{}\" castshadow=\"{}\"{}/>\n",
         l.directional ? "true" : "false", Vec3(l.position), Vec3(l.direction.normalized()),
-        Rgb(l.diffuse), Rgb(l.ambient), Rgb(l.specular),
-        options.shadows ? "true" : "false",
+        Rgb(l.diffuse), Rgb(l.ambient), Rgb(l.specular), options.shadows ? "true" : "false",
         // MuJoCo's lights are 45-degree spotlights by default; a ceiling lamp lights the
         // whole room, so positional lights become point lights (GL's cutoff 180).
         l.directional ? "" : " cutoff=\"180\" exponent=\"0\"");
   }
+  return xml.str();
+}
 
+// Everything before the assets: compiler, simulation options, rendering settings and
+// defaults.
+std::string HeaderXml(const scenes::World& world, const MjcfOptions& options) {
+  const scenes::CameraSpec& cam = world.camera;
   std::ostringstream xml;
   xml << fmt::format("<mujoco model=\"{}\">\n", world.name.empty() ? "segslam" : world.name);
   xml << "  <compiler angle=\"radian\"/>\n";
@@ -262,10 +277,38 @@ MjcfModel BuildMjcf(const scenes::World& world, const MjcfOptions& options) {
   xml << fmt::format("    <headlight active=\"{}\"/>\n", world.lights.empty() ? 1 : 0);
   xml << "  </visual>\n";
   xml << "  <default>\n    <geom contype=\"0\" conaffinity=\"0\" group=\"0\"/>\n  </default>\n";
-  xml << "  <asset>\n" << assets.str() << "  </asset>\n";
-  xml << "  <worldbody>\n" << lights.str() << body.str() << "  </worldbody>\n";
-  xml << "</mujoco>\n";
-  out.xml = xml.str();
+  return xml.str();
+}
+
+}  // namespace
+
+std::string TextureName(int texture_index) { return fmt::format("tex{}", texture_index); }
+std::string PartBodyName(int object_index, int part_index) {
+  return fmt::format("obj{}_part{}", object_index, part_index);
+}
+
+MjcfModel BuildMjcf(const scenes::World& world, const MjcfOptions& options) {
+  CheckWorld(world);
+  MjcfModel out;
+  AssetSection assets(world);
+  out.texture_names = assets.AddTextures();
+  assets.AddMaterials();
+
+  std::ostringstream body;  // worldbody content
+  for (const scenes::Geom& g : world.static_geoms) body << assets.Geom(g, "    ");
+  body << ObjectBodies(world, &assets, &out.part_bodies);
+  out.camera_body = "segslam_camera";
+  out.camera = "segslam_camera";
+  // The optical frame (x right, y down, z forward) is MuJoCo's camera frame (looking
+  // along -z, y up) rotated 180 deg about x: quaternion (w x y z) = (0 1 0 0).
+  body << fmt::format(
+      "    <body name=\"{}\" mocap=\"true\">\n"
+      "      <camera name=\"{}\" fovy=\"{}\" pos=\"0 0 0\" quat=\"0 1 0 0\"/>\n"
+      "    </body>\n",
+      out.camera_body, out.camera, Num(world.camera.fovy_deg));
+
+  out.xml = HeaderXml(world, options) + assets.Xml() + "  <worldbody>\n" +
+            LightsXml(world.lights, options) + body.str() + "  </worldbody>\n</mujoco>\n";
   return out;
 }
 
