@@ -95,52 +95,56 @@ std::string Cell(const SpreadTable& table, const std::string& pass, const std::s
 
 std::string ValueText(double value) { return std::isnan(value) ? "n/a" : fmt::format("{:.6g}", value); }
 
-// The report's tables, in the layout of the paper's.
-std::vector<Table> ReportTables(const ScenarioReport& report) {
-  const std::vector<std::string>& modes = report.bench.modes;
-  const std::string spread_note = "median [min, max] over repeats; one number where a mode ran once.";
-  std::vector<Table> tables;
+// The report's tables, in the layout of the paper's; each says what its cells are.
+const char* const kSpreadNote = "median [min, max] over repeats; one number where a mode ran once.";
 
+Table ExpectationsTable(const ScenarioReport& report) {
   Table checks{"Expectations", "Medians over repeats (ratios: of medians), against the scenario's expect: section.",
                {"metric", "threshold", "value", "result"}, {}};
   for (const ExpectationResult& r : report.checks) {
     checks.rows.push_back({r.expectation.name.text, r.expectation.Bounds(), ValueText(r.value), r.passed ? "PASS" : "FAIL"});
   }
-  if (!checks.rows.empty()) tables.push_back(checks);
+  return checks;
+}
 
+Table AteTable(const ScenarioReport& report) {
   Table ate{"ATE rmse [m] per sequence and mode (as the paper's Table I)",
-            spread_note + " Pass 1 aligned to the ground truth (Horn); pass 2 in pass 1's aligned map frame.",
+            std::string(kSpreadNote) + " Pass 1 aligned to the ground truth (Horn); pass 2 in pass 1's aligned map frame.",
             {"sequence"}, {}};
-  for (const auto& mode : modes) ate.header.push_back(mode);
+  for (const auto& mode : report.bench.modes) ate.header.push_back(mode);
   for (const auto& pass : kPasses) {
     std::vector<std::string> row = {report.scenario_name + " " + pass};
-    for (const auto& mode : modes) row.push_back(Cell(report.spreads, pass, mode, "ate_rmse_m", 4));
+    for (const auto& mode : report.bench.modes) row.push_back(Cell(report.spreads, pass, mode, "ate_rmse_m", 4));
     ate.rows.push_back(row);
   }
-  tables.push_back(ate);
+  return ate;
+}
 
+Table RpeTable(const ScenarioReport& report) {
   Table rpe{"RPE rmse per second: translation [m] / rotation [deg]",
-            spread_note + " n/a: fewer than 2 pose pairs 1 s apart (results.json: rpe.missing says why).",
+            std::string(kSpreadNote) + " n/a: fewer than 2 pose pairs 1 s apart (results.json: rpe.missing says why).",
             {"sequence"},
             {}};
-  for (const auto& mode : modes) rpe.header.push_back(mode);
+  for (const auto& mode : report.bench.modes) rpe.header.push_back(mode);
   for (const auto& pass : kPasses) {
     std::vector<std::string> row = {report.scenario_name + " " + pass};
-    for (const auto& mode : modes) {
+    for (const auto& mode : report.bench.modes) {
       row.push_back(Cell(report.spreads, pass, mode, "rpe_trans_rmse_m", 4) + " / " +
                     Cell(report.spreads, pass, mode, "rpe_rot_rmse_deg", 3));
     }
     rpe.rows.push_back(row);
   }
-  tables.push_back(rpe);
+  return rpe;
+}
 
+Table SegmentationTable(const ScenarioReport& report) {
   Table seg{"Segmentation in the loop, raw vs refined [%] (as the paper's Tables II and IV)",
-            spread_note + " Scored against the ground-truth masks with SLAM's poses; segmenter " +
+            std::string(kSpreadNote) + " Scored against the ground-truth masks with SLAM's poses; segmenter " +
                 report.bench.SegmenterLabel() + ".",
             {"sequence", "mode", "raw mAP", "raw AP50", "raw mIoU", "refined mAP", "refined AP50", "refined mIoU"},
             {}};
   for (const auto& pass : kPasses) {
-    for (const auto& mode : modes) {
+    for (const auto& mode : report.bench.modes) {
       const Spread* raw = FindSpread(report.spreads, pass, mode, "seg_raw_map");
       if (raw == nullptr || raw->count == 0) continue;
       std::vector<std::string> row = {report.scenario_name + " " + pass, mode};
@@ -152,30 +156,36 @@ std::vector<Table> ReportTables(const ScenarioReport& report) {
     }
   }
   if (seg.rows.empty()) seg.note = "No run scored masks (the mutual loop with a simulated segmenter writes seg.json).";
-  tables.push_back(seg);
+  return seg;
+}
 
+Table RelocalizationTable(const ScenarioReport& report) {
   Table reloc{"Relocalization in pass 2 on pass 1's long-term map (as the paper's Table III)",
-              spread_note + " ATE in the map frame, not re-aligned.",
+              std::string(kSpreadNote) + " ATE in the map frame, not re-aligned.",
               {"mode", "localized [%]", "ATE rmse [m]", "ATE max [m]"},
               {}};
-  for (const auto& mode : modes) {
+  for (const auto& mode : report.bench.modes) {
     reloc.rows.push_back({mode, Cell(report.spreads, "pass2", mode, "localized_share", 1, 100),
                           Cell(report.spreads, "pass2", mode, "ate_rmse_m", 4),
                           Cell(report.spreads, "pass2", mode, "ate_max_m", 4)});
   }
-  tables.push_back(reloc);
+  return reloc;
+}
 
+// Rows only for mutual: plain knows no instances; mask-moveable drops moveable instances
+// unjudged.
+Table MovingDetectionTable(const ScenarioReport& report) {
   Table moving{"Moving-object detection vs the ground-truth tracks [%]",
-               spread_note + " Precision and recall over instances SLAM judged, each (frame, instance) once; coverage: "
-                             "the share of moving instances SLAM saw (a feature on them, judged or not) that it judged "
-                             "moving. Moving features: the share of a frame's features that lie on truly moving "
-                             "objects, mean and max over the frames (how much of what SLAM saw moved). Truth: "
-                             "tracks.json's moving flag.",
+               std::string(kSpreadNote) +
+                   " Precision and recall over instances SLAM judged, each (frame, instance) once; coverage: "
+                   "the share of moving instances SLAM saw (a feature on them, judged or not) that it judged "
+                   "moving. Moving features: the share of a frame's features that lie on truly moving "
+                   "objects, mean and max over the frames (how much of what SLAM saw moved). Truth: "
+                   "tracks.json's moving flag.",
                {"sequence", "mode", "precision", "recall", "coverage", "moving features, mean", "moving features, max"},
                {}};
   for (const auto& pass : kPasses) {
-    for (const auto& mode : modes) {
-      // plain knows no instances; mask-moveable drops moveable instances unjudged.
+    for (const auto& mode : report.bench.modes) {
       if (mode != "mutual") continue;
       moving.rows.push_back({report.scenario_name + " " + pass, mode,
                              Cell(report.spreads, pass, mode, "moving_precision", 1, 100),
@@ -185,8 +195,10 @@ std::vector<Table> ReportTables(const ScenarioReport& report) {
                              Cell(report.spreads, pass, mode, "moving_feature_share_max", 1, 100)});
     }
   }
-  if (!moving.rows.empty()) tables.push_back(moving);
+  return moving;
+}
 
+Table RunsTable(const ScenarioReport& report) {
   Table runs{"Every run", "Seeds are the simulated segmenter's; a deterministic mode ran once.",
              {"mode", "repeat", "seed", "pass1 ATE rmse [m]", "pass2 ATE rmse [m]", "pass2 localized [%]", "seconds",
               "outputs"},
@@ -210,7 +222,18 @@ std::vector<Table> ReportTables(const ScenarioReport& report) {
     row.push_back(run.run_dir);
     runs.rows.push_back(row);
   }
-  tables.push_back(runs);
+  return runs;
+}
+
+std::vector<Table> ReportTables(const ScenarioReport& report) {
+  std::vector<Table> tables;
+  if (!report.checks.empty()) tables.push_back(ExpectationsTable(report));
+  tables.push_back(AteTable(report));
+  tables.push_back(RpeTable(report));
+  tables.push_back(SegmentationTable(report));
+  tables.push_back(RelocalizationTable(report));
+  if (Table moving = MovingDetectionTable(report); !moving.rows.empty()) tables.push_back(std::move(moving));
+  tables.push_back(RunsTable(report));
   return tables;
 }
 
