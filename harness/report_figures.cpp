@@ -514,18 +514,17 @@ bool LinePlotOptions::IsValid(std::string* error) const {
   return problem.empty();
 }
 
-Figure DrawLinePlot(const LinePlotOptions& options, const std::vector<double>& x,
-                    const std::vector<PlotSeries>& series) {
-  const std::string origin = "line plot '" + options.title + "'";
-  std::string problem;
-  if (!options.IsValid(&problem)) throw Error(origin + ": " + problem);
+namespace {
+
+// Throws unless x is finite and strictly increasing and every series has one value per x
+// (y_min and y_max may also be empty).
+void CheckLinePlotInput(const std::string& origin, const std::vector<double>& x,
+                        const std::vector<PlotSeries>& series) {
   if (x.empty()) throw Error(origin + ": no x values");
   for (size_t i = 0; i < x.size(); ++i) {
     if (!std::isfinite(x[i])) throw Error(origin + ": x value " + std::to_string(i) + " is not finite");
     if (i > 0 && !(x[i] > x[i - 1])) throw Error(origin + ": x values must strictly increase");
   }
-  bool any_error_bar = false;
-  double y_lo = std::numeric_limits<double>::infinity(), y_hi = -y_lo;
   for (const PlotSeries& s : series) {
     const auto check = [&](const std::vector<double>& values, const char* what, bool may_be_empty) {
       if (values.size() == x.size() || (may_be_empty && values.empty())) return;
@@ -535,7 +534,21 @@ Figure DrawLinePlot(const LinePlotOptions& options, const std::vector<double>& x
     check(s.y, "y", false);
     check(s.y_min, "y_min", true);
     check(s.y_max, "y_max", true);
-    any_error_bar = any_error_bar || !s.y_min.empty() || !s.y_max.empty();
+  }
+}
+
+bool AnyErrorBar(const std::vector<PlotSeries>& series) {
+  return std::any_of(series.begin(), series.end(),
+                     [](const PlotSeries& s) { return !s.y_min.empty() || !s.y_max.empty(); });
+}
+
+// The line plot's axes: y a nice range over every finite value (bars included) with a
+// little headroom, so the top marker does not sit on the frame; x the values with 6 %
+// to spare on each side.
+PlotAxes LinePlotAxes(const LinePlotOptions& options, const std::vector<double>& x,
+                      const std::vector<PlotSeries>& series, double* y_step) {
+  double y_lo = std::numeric_limits<double>::infinity(), y_hi = -y_lo;
+  for (const PlotSeries& s : series) {
     for (const auto* values : {&s.y, &s.y_min, &s.y_max}) {
       for (double v : *values) {
         if (!std::isfinite(v)) continue;
@@ -551,79 +564,124 @@ Figure DrawLinePlot(const LinePlotOptions& options, const std::vector<double>& x
   if (options.y_from_zero && y_lo >= 0) y_lo = 0;
   if (y_hi - y_lo < 1e-12) y_hi = y_lo + (y_lo == 0 ? 1 : std::abs(y_lo) * 0.1);
 
-  // y: a nice range with a little headroom, so the top marker does not sit on the frame.
-  const double y_step = NiceStep(y_hi - y_lo, 6);
+  *y_step = NiceStep(y_hi - y_lo, 6);
   PlotAxes axes;
-  axes.y_min = std::floor(y_lo / y_step + 1e-9) * y_step;
-  axes.y_max = std::ceil((y_hi + 0.04 * (y_hi - y_lo)) / y_step - 1e-9) * y_step;
-  const Ticks y_ticks = NiceTicks(axes.y_min, axes.y_max, y_step);
-  // x: the values themselves for a short sweep, else a nice grid.
+  axes.y_min = std::floor(y_lo / *y_step + 1e-9) * *y_step;
+  axes.y_max = std::ceil((y_hi + 0.04 * (y_hi - y_lo)) / *y_step - 1e-9) * *y_step;
   const double x_span = x.size() > 1 ? x.back() - x.front() : 2.0;
   axes.x_min = x.front() - 0.06 * x_span;
   axes.x_max = x.back() + 0.06 * x_span;
-  Ticks x_ticks;
-  if (x.size() <= 12) {
-    for (double v : x) {
-      x_ticks.values.push_back(v);
-      x_ticks.labels.push_back(fmt::format("{:g}", v));
-    }
-  } else {
-    const double x_step = NiceStep(x_span, 8);
-    x_ticks = NiceTicks(axes.x_min, axes.x_max, x_step);
+  return axes;
+}
+
+// x ticks: the values themselves for a short sweep, else a nice grid.
+Ticks LinePlotXTicks(const PlotAxes& axes, const std::vector<double>& x) {
+  Ticks ticks;
+  if (x.size() > 12) {
+    const double x_span = x.size() > 1 ? x.back() - x.front() : 2.0;
+    return NiceTicks(axes.x_min, axes.x_max, NiceStep(x_span, 8));
   }
-  static const std::array<Marker, 5> kMarkers = {Marker::kCircle, Marker::kSquare, Marker::kTriangle,
-                                                 Marker::kDiamond, Marker::kInvertedTriangle};
+  for (double v : x) {
+    ticks.values.push_back(v);
+    ticks.labels.push_back(fmt::format("{:g}", v));
+  }
+  return ticks;
+}
+
+constexpr std::array<Marker, 5> kSeriesMarkers = {Marker::kCircle, Marker::kSquare, Marker::kTriangle,
+                                                  Marker::kDiamond, Marker::kInvertedTriangle};
+
+// One series in pixels: line pieces (broken at missing values), markers, error bars.
+struct SeriesPixels {
+  std::vector<std::vector<cv::Point2d>> lines;
+  std::vector<cv::Point2d> markers;
+  std::vector<std::pair<cv::Point2d, cv::Point2d>> bars;  // bottom, top
+};
+
+std::vector<SeriesPixels> SeriesToPixels(const PlotAxes& axes, bool markers, const std::vector<double>& x,
+                                         const std::vector<PlotSeries>& series) {
+  const bool any_error_bar = AnyErrorBar(series);
+  std::vector<SeriesPixels> all(series.size());
+  for (size_t k = 0; k < series.size(); ++k) {
+    const PlotSeries& s = series[k];
+    SeriesPixels& pixels = all[k];
+    // Series side by side at each x when bars are drawn, so they do not hide each other.
+    const double dodge_px = any_error_bar ? (k - (series.size() - 1) / 2.0) * 7.0 : 0.0;
+    const auto at = [&](size_t i, double y) { return axes.ToPixel(x[i], y) + cv::Point2d(dodge_px, 0); };
+    pixels.lines.emplace_back();
+    for (size_t i = 0; i < x.size(); ++i) {
+      if (!std::isfinite(s.y[i])) {
+        pixels.lines.emplace_back();
+        continue;
+      }
+      pixels.lines.back().push_back(at(i, s.y[i]));
+      if (markers) pixels.markers.push_back(at(i, s.y[i]));
+      const double lo = s.y_min.empty() ? NAN : s.y_min[i];
+      const double hi = s.y_max.empty() ? NAN : s.y_max[i];
+      if (std::isfinite(lo) || std::isfinite(hi)) {
+        pixels.bars.emplace_back(at(i, std::isfinite(lo) ? lo : s.y[i]), at(i, std::isfinite(hi) ? hi : s.y[i]));
+      }
+    }
+  }
+  return all;
+}
+
+// Every pixel the lines and bars pass through, for placing the legend off them.
+std::vector<cv::Point2d> DataPixels(const std::vector<SeriesPixels>& all) {
+  std::vector<cv::Point2d> pixels;
+  for (const SeriesPixels& one : all) {
+    for (const auto& line : one.lines) AppendDensified(line, &pixels);
+    for (const auto& [bottom, top] : one.bars) AppendDensified({bottom, top}, &pixels);
+  }
+  return pixels;
+}
+
+// Lines and capped error bars of every series, then the markers over all of them.
+void DrawSeries(const std::vector<SeriesPixels>& all, cv::Mat& image) {
+  for (size_t k = 0; k < all.size(); ++k) {
+    const cv::Scalar color = SeriesColor(k);
+    for (const auto& line : all[k].lines) DrawPolyline(image, line, color, 2);
+    for (const auto& [bottom, top] : all[k].bars) {
+      cv::line(image, Fixed(bottom), Fixed(top), color, 1, cv::LINE_AA, kShift);
+      for (const cv::Point2d& end : {bottom, top}) {
+        cv::line(image, Fixed(end - cv::Point2d(4, 0)), Fixed(end + cv::Point2d(4, 0)), color, 1, cv::LINE_AA,
+                 kShift);
+      }
+    }
+  }
+  for (size_t k = 0; k < all.size(); ++k) {
+    for (const cv::Point2d& marker : all[k].markers) {
+      DrawMarker(image, marker, kSeriesMarkers[k % kSeriesMarkers.size()], SeriesColor(k), 9);
+    }
+  }
+}
+
+}  // namespace
+
+Figure DrawLinePlot(const LinePlotOptions& options, const std::vector<double>& x,
+                    const std::vector<PlotSeries>& series) {
+  const std::string origin = "line plot '" + options.title + "'";
+  std::string problem;
+  if (!options.IsValid(&problem)) throw Error(origin + ": " + problem);
+  CheckLinePlotInput(origin, x, series);
+
+  double y_step = 0;
+  PlotAxes axes = LinePlotAxes(options, x, series, &y_step);
+  const Ticks y_ticks = NiceTicks(axes.y_min, axes.y_max, y_step);
+  const Ticks x_ticks = LinePlotXTicks(axes, x);
   std::vector<LegendEntry> legend;
   for (size_t k = 0; k < series.size(); ++k) {
-    const Marker marker = options.markers ? kMarkers[k % kMarkers.size()] : Marker::kNone;
+    const Marker marker = options.markers ? kSeriesMarkers[k % kSeriesMarkers.size()] : Marker::kNone;
     legend.push_back({series[k].name, SeriesColor(k), 2, marker});
   }
 
-  // Each series in pixels: line pieces (broken at missing values), markers, error bars.
-  struct SeriesPixels {
-    std::vector<std::vector<cv::Point2d>> lines;
-    std::vector<cv::Point2d> markers;
-    std::vector<std::pair<cv::Point2d, cv::Point2d>> bars;  // bottom, top
-  };
-  const auto series_pixels = [&](const PlotAxes& plot_axes) {
-    std::vector<SeriesPixels> all(series.size());
-    for (size_t k = 0; k < series.size(); ++k) {
-      const PlotSeries& s = series[k];
-      SeriesPixels& pixels = all[k];
-      // Series side by side at each x when bars are drawn, so they do not hide each other.
-      const double dodge_px = any_error_bar ? (k - (series.size() - 1) / 2.0) * 7.0 : 0.0;
-      const auto at = [&](size_t i, double y) { return plot_axes.ToPixel(x[i], y) + cv::Point2d(dodge_px, 0); };
-      pixels.lines.emplace_back();
-      for (size_t i = 0; i < x.size(); ++i) {
-        if (!std::isfinite(s.y[i])) {
-          pixels.lines.emplace_back();
-          continue;
-        }
-        pixels.lines.back().push_back(at(i, s.y[i]));
-        if (options.markers) pixels.markers.push_back(at(i, s.y[i]));
-        const double lo = s.y_min.empty() ? NAN : s.y_min[i];
-        const double hi = s.y_max.empty() ? NAN : s.y_max[i];
-        if (std::isfinite(lo) || std::isfinite(hi)) {
-          pixels.bars.emplace_back(at(i, std::isfinite(lo) ? lo : s.y[i]), at(i, std::isfinite(hi) ? hi : s.y[i]));
-        }
-      }
-    }
-    return all;
-  };
-  const auto data_pixels = [&](const std::vector<SeriesPixels>& all) {
-    std::vector<cv::Point2d> pixels;
-    for (const SeriesPixels& one : all) {
-      for (const auto& line : one.lines) AppendDensified(line, &pixels);
-      for (const auto& [bottom, top] : one.bars) AppendDensified({bottom, top}, &pixels);
-    }
-    return pixels;
-  };
-
+  // The legend goes inside the plot where it covers no data, else to the right of it.
   Margins margins = PlotMargins(!options.title.empty(), WidestLabel(y_ticks));
   axes.area = PlotArea(options.size, margins);
   const cv::Size legend_size = LegendSize(legend);
   size_t covered_points = 0;
-  cv::Point legend_at = LegendCorner(axes.area, legend_size, data_pixels(series_pixels(axes)), &covered_points);
+  cv::Point legend_at = LegendCorner(axes.area, legend_size,
+                                     DataPixels(SeriesToPixels(axes, options.markers, x, series)), &covered_points);
   if (covered_points > 0) {
     margins.right += legend_size.width + kOutsideLegendGapPx;
     axes.area = PlotArea(options.size, margins);
@@ -634,24 +692,7 @@ Figure DrawLinePlot(const LinePlotOptions& options, const std::vector<double>& x
   figure.axes = axes;
   figure.image = WhiteCanvas(options.size);
   DrawAxes(figure.image, axes, x_ticks, y_ticks, options.x_label, options.y_label, options.title);
-  const std::vector<SeriesPixels> all = series_pixels(axes);
-  for (size_t k = 0; k < series.size(); ++k) {
-    const cv::Scalar color = SeriesColor(k);
-    for (const auto& line : all[k].lines) DrawPolyline(figure.image, line, color, 2);
-    for (const auto& [bottom, top] : all[k].bars) {
-      cv::line(figure.image, Fixed(bottom), Fixed(top), color, 1, cv::LINE_AA, kShift);
-      for (const cv::Point2d& end : {bottom, top}) {
-        cv::line(figure.image, Fixed(end - cv::Point2d(4, 0)), Fixed(end + cv::Point2d(4, 0)), color, 1, cv::LINE_AA,
-                 kShift);
-      }
-    }
-  }
-  // Markers last, over every line and bar.
-  for (size_t k = 0; k < series.size(); ++k) {
-    for (const cv::Point2d& marker : all[k].markers) {
-      DrawMarker(figure.image, marker, kMarkers[k % kMarkers.size()], SeriesColor(k), 9);
-    }
-  }
+  DrawSeries(SeriesToPixels(axes, options.markers, x, series), figure.image);
   if (!legend.empty()) DrawLegend(figure.image, legend_at, legend);
   return figure;
 }
