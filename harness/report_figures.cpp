@@ -384,92 +384,140 @@ bool TopViewOptions::IsValid(std::string* error) const {
   return problem.empty();
 }
 
-Figure DrawTopView(const TopViewOptions& options, const NamedTrajectory& ground_truth,
-                   const std::vector<NamedTrajectory>& estimates) {
-  std::string problem;
-  if (!options.IsValid(&problem)) throw Error("top-view plot '" + options.title + "': " + problem);
-  std::vector<const NamedTrajectory*> trajectories = {&ground_truth};
-  for (const NamedTrajectory& estimate : estimates) trajectories.push_back(&estimate);
+namespace {
 
-  // Data bounds on the ground plane.
+// The box of every position on the ground plane (x, y), metres.
+struct GroundBounds {
   double x_lo = std::numeric_limits<double>::infinity(), x_hi = -x_lo, y_lo = x_lo, y_hi = -x_lo;
+};
+
+GroundBounds TrajectoryBounds(const std::string& origin, const std::vector<const NamedTrajectory*>& trajectories) {
+  GroundBounds b;
   for (const NamedTrajectory* trajectory : trajectories) {
     for (const StampedPose& pose : trajectory->poses) {
       const Eigen::Vector3d& t = pose.T_wc.translation();
-      if (!t.allFinite()) throw Error("top-view plot '" + options.title + "': trajectory '" + trajectory->name +
-                                      "' has a non-finite position");
-      x_lo = std::min(x_lo, t.x());
-      x_hi = std::max(x_hi, t.x());
-      y_lo = std::min(y_lo, t.y());
-      y_hi = std::max(y_hi, t.y());
+      if (!t.allFinite()) throw Error(origin + ": trajectory '" + trajectory->name + "' has a non-finite position");
+      b.x_lo = std::min(b.x_lo, t.x());
+      b.x_hi = std::max(b.x_hi, t.x());
+      b.y_lo = std::min(b.y_lo, t.y());
+      b.y_hi = std::max(b.y_hi, t.y());
     }
   }
-  if (!(x_lo <= x_hi)) throw Error("top-view plot '" + options.title + "': no trajectory has a pose");
+  if (!(b.x_lo <= b.x_hi)) throw Error(origin + ": no trajectory has a pose");
+  return b;
+}
 
-  // Legend entries first: their size decides whether the legend fits inside the plot.
-  const auto color_of = [](size_t k) { return k == 0 ? kGroundTruthColor : SeriesColor(k - 1); };
-  const auto thickness_of = [](size_t k) { return k == 0 ? 3 : 2; };
-  std::vector<LegendEntry> legend;
-  for (size_t k = 0; k < trajectories.size(); ++k) {
-    legend.push_back({trajectories[k]->name, color_of(k), thickness_of(k), Marker::kNone});
+// Trajectory k of a top view: 0 is the ground truth, drawn thicker, under the estimates.
+cv::Scalar TopViewColor(size_t k) { return k == 0 ? kGroundTruthColor : SeriesColor(k - 1); }
+int TopViewThickness(size_t k) { return k == 0 ? 3 : 2; }
+
+// Equal scale on both axes: the axis with room to spare shows more, centred on the data.
+// With shrink_to_fit the figure is no taller than the trajectories need: the plot area
+// takes their aspect.
+PlotAxes TopViewAxes(const TopViewOptions& options, const GroundBounds& b, double pad, const Margins& margins,
+                     cv::Size* figure_size) {
+  *figure_size = options.size;
+  if (options.shrink_to_fit) {
+    const int width_px = PlotArea(*figure_size, margins).width;
+    const double needed_height_px = width_px * (b.y_hi - b.y_lo + 2 * pad) / (b.x_hi - b.x_lo + 2 * pad);
+    const int needed_figure_px = static_cast<int>(std::ceil(needed_height_px)) + margins.top + margins.bottom;
+    figure_size->height = std::clamp(needed_figure_px, std::min(options.size.height, 320), options.size.height);
   }
-  const cv::Scalar marker_grey(150, 150, 150);
-  legend.push_back({"start", marker_grey, 0, Marker::kCircle});
-  legend.push_back({"end", marker_grey, 0, Marker::kSquare});
-  const cv::Size legend_size = LegendSize(legend);
-  std::vector<std::vector<std::vector<cv::Point2d>>> segments_of;  // per trajectory, metres
+  PlotAxes axes;
+  axes.area = PlotArea(*figure_size, margins);
+  const double scale_px_per_m =
+      std::min(axes.area.width / (b.x_hi - b.x_lo + 2 * pad), axes.area.height / (b.y_hi - b.y_lo + 2 * pad));
+  const double x_center = (b.x_lo + b.x_hi) / 2, y_center = (b.y_lo + b.y_hi) / 2;
+  axes.x_min = x_center - axes.area.width / (2 * scale_px_per_m);
+  axes.x_max = x_center + axes.area.width / (2 * scale_px_per_m);
+  axes.y_min = y_center - axes.area.height / (2 * scale_px_per_m);
+  axes.y_max = y_center + axes.area.height / (2 * scale_px_per_m);
+  return axes;
+}
+
+using GroundSegments = std::vector<std::vector<cv::Point2d>>;  // pieces between gaps, metres
+
+// Every pixel the trajectories pass through, for placing the legend off them.
+std::vector<cv::Point2d> TrajectoryPixels(const PlotAxes& axes, const std::vector<GroundSegments>& segments_of) {
+  std::vector<cv::Point2d> pixels;
+  for (const GroundSegments& segments : segments_of) {
+    for (const auto& segment : segments) {
+      std::vector<cv::Point2d> polyline;
+      for (const cv::Point2d& p : segment) polyline.push_back(axes.ToPixel(p.x, p.y));
+      AppendDensified(polyline, &pixels);
+    }
+  }
+  return pixels;
+}
+
+// The trajectories clipped to the plot area, in order (ground truth first, under the
+// estimates), then start and end markers on top of every line.
+void DrawTrajectories(const PlotAxes& axes, const std::vector<const NamedTrajectory*>& trajectories,
+                      const std::vector<GroundSegments>& segments_of, cv::Mat& image) {
+  const cv::Rect area = axes.area;
+  cv::Mat plot = image(area);
+  for (size_t k = 0; k < trajectories.size(); ++k) {
+    for (const auto& segment : segments_of[k]) {
+      std::vector<cv::Point2d> pixels;
+      for (const cv::Point2d& p : segment) pixels.push_back(axes.ToPixel(p.x, p.y) - cv::Point2d(area.x, area.y));
+      DrawPolyline(plot, pixels, TopViewColor(k), TopViewThickness(k));
+      // A single pose between two gaps is still visible.
+      if (pixels.size() == 1) {
+        cv::circle(plot, Fixed(pixels[0]), static_cast<int>(TopViewThickness(k) * kSubPixel), TopViewColor(k),
+                   cv::FILLED, cv::LINE_AA, kShift);
+      }
+    }
+  }
+  for (size_t k = 0; k < trajectories.size(); ++k) {
+    const auto& poses = trajectories[k]->poses;
+    if (poses.empty()) continue;
+    const Eigen::Vector3d& first = poses.front().T_wc.translation();
+    const Eigen::Vector3d& last = poses.back().T_wc.translation();
+    DrawMarker(image, axes.ToPixel(first.x(), first.y()), Marker::kCircle, TopViewColor(k), 11);
+    DrawMarker(image, axes.ToPixel(last.x(), last.y()), Marker::kSquare, TopViewColor(k), 9);
+  }
+}
+
+}  // namespace
+
+Figure DrawTopView(const TopViewOptions& options, const NamedTrajectory& ground_truth,
+                   const std::vector<NamedTrajectory>& estimates) {
+  const std::string origin = "top-view plot '" + options.title + "'";
+  std::string problem;
+  if (!options.IsValid(&problem)) throw Error(origin + ": " + problem);
+  std::vector<const NamedTrajectory*> trajectories = {&ground_truth};
+  for (const NamedTrajectory& estimate : estimates) trajectories.push_back(&estimate);
+  const GroundBounds bounds = TrajectoryBounds(origin, trajectories);
+  std::vector<GroundSegments> segments_of;
   for (const NamedTrajectory* trajectory : trajectories) {
     segments_of.push_back(GroundPlaneSegments(trajectory->poses, options.gap_factor));
   }
 
-  // Equal scale: the axis with room to spare shows more, centred on the data.
-  const double extent = std::max({x_hi - x_lo, y_hi - y_lo, 0.1});
+  std::vector<LegendEntry> legend;
+  for (size_t k = 0; k < trajectories.size(); ++k) {
+    legend.push_back({trajectories[k]->name, TopViewColor(k), TopViewThickness(k), Marker::kNone});
+  }
+  const cv::Scalar marker_grey(150, 150, 150);
+  legend.push_back({"start", marker_grey, 0, Marker::kCircle});
+  legend.push_back({"end", marker_grey, 0, Marker::kSquare});
+
+  // The legend goes inside the plot where it covers no trajectory, else to the right.
+  const double extent = std::max({bounds.x_hi - bounds.x_lo, bounds.y_hi - bounds.y_lo, 0.1});
   const double pad = options.padding * extent;
-  const Ticks provisional_y = NiceTicks(y_lo - extent, y_hi + extent, NiceStep(extent, 6));
+  const Ticks provisional_y = NiceTicks(bounds.y_lo - extent, bounds.y_hi + extent, NiceStep(extent, 6));
   Margins margins = PlotMargins(!options.title.empty(), WidestLabel(provisional_y));
-  cv::Size figure_size = options.size;
-  const auto layout = [&]() {
-    // A figure no taller than the trajectories need: the plot area takes their aspect.
-    figure_size = options.size;
-    if (options.shrink_to_fit) {
-      const int width_px = PlotArea(figure_size, margins).width;
-      const double needed_height_px = width_px * (y_hi - y_lo + 2 * pad) / (x_hi - x_lo + 2 * pad);
-      const int needed_figure_px = static_cast<int>(std::ceil(needed_height_px)) + margins.top + margins.bottom;
-      figure_size.height = std::clamp(needed_figure_px, std::min(options.size.height, 320), options.size.height);
-    }
-    PlotAxes axes;
-    axes.area = PlotArea(figure_size, margins);
-    const double scale_px_per_m =
-        std::min(axes.area.width / (x_hi - x_lo + 2 * pad), axes.area.height / (y_hi - y_lo + 2 * pad));
-    const double x_center = (x_lo + x_hi) / 2, y_center = (y_lo + y_hi) / 2;
-    axes.x_min = x_center - axes.area.width / (2 * scale_px_per_m);
-    axes.x_max = x_center + axes.area.width / (2 * scale_px_per_m);
-    axes.y_min = y_center - axes.area.height / (2 * scale_px_per_m);
-    axes.y_max = y_center + axes.area.height / (2 * scale_px_per_m);
-    return axes;
-  };
-  const auto data_pixels = [&](const PlotAxes& axes) {
-    std::vector<cv::Point2d> pixels;
-    for (const auto& segments : segments_of) {
-      for (const auto& segment : segments) {
-        std::vector<cv::Point2d> polyline;
-        for (const cv::Point2d& p : segment) polyline.push_back(axes.ToPixel(p.x, p.y));
-        AppendDensified(polyline, &pixels);
-      }
-    }
-    return pixels;
-  };
-  PlotAxes axes = layout();
+  cv::Size figure_size;
+  PlotAxes axes = TopViewAxes(options, bounds, pad, margins, &figure_size);
+  const cv::Size legend_size = LegendSize(legend);
   size_t covered_points = 0;
-  cv::Point legend_at = LegendCorner(axes.area, legend_size, data_pixels(axes), &covered_points);
+  cv::Point legend_at = LegendCorner(axes.area, legend_size, TrajectoryPixels(axes, segments_of), &covered_points);
   if (covered_points > 0) {
     margins.right += legend_size.width + kOutsideLegendGapPx;
-    axes = layout();
+    axes = TopViewAxes(options, bounds, pad, margins, &figure_size);
     legend_at = {axes.area.x + axes.area.width + kOutsideLegendGapPx, axes.area.y};
   }
-  const cv::Rect area = axes.area;
   // One grid step for both axes, about every 90 pixels, so the grid is made of squares.
-  const double longer_side_px = std::max(area.width, area.height);
+  const double longer_side_px = std::max(axes.area.width, axes.area.height);
   const double step = NiceStep(longer_side_px / axes.PixelsPerUnitX(), longer_side_px / 90.0);
 
   Figure figure;
@@ -477,30 +525,7 @@ Figure DrawTopView(const TopViewOptions& options, const NamedTrajectory& ground_
   figure.image = WhiteCanvas(figure_size);
   DrawAxes(figure.image, axes, NiceTicks(axes.x_min, axes.x_max, step), NiceTicks(axes.y_min, axes.y_max, step),
            "x [m]", "y [m]", options.title);
-
-  // Trajectories clipped to the plot area; ground truth first, under the estimates.
-  cv::Mat plot = figure.image(area);
-  for (size_t k = 0; k < trajectories.size(); ++k) {
-    for (const auto& segment : segments_of[k]) {
-      std::vector<cv::Point2d> pixels;
-      for (const cv::Point2d& p : segment) pixels.push_back(axes.ToPixel(p.x, p.y) - cv::Point2d(area.x, area.y));
-      DrawPolyline(plot, pixels, color_of(k), thickness_of(k));
-      // A single pose between two gaps is still visible.
-      if (pixels.size() == 1) {
-        cv::circle(plot, Fixed(pixels[0]), static_cast<int>(thickness_of(k) * kSubPixel), color_of(k), cv::FILLED,
-                   cv::LINE_AA, kShift);
-      }
-    }
-  }
-  // Start and end markers on top of every line.
-  for (size_t k = 0; k < trajectories.size(); ++k) {
-    const auto& poses = trajectories[k]->poses;
-    if (poses.empty()) continue;
-    const Eigen::Vector3d& first = poses.front().T_wc.translation();
-    const Eigen::Vector3d& last = poses.back().T_wc.translation();
-    DrawMarker(figure.image, axes.ToPixel(first.x(), first.y()), Marker::kCircle, color_of(k), 11);
-    DrawMarker(figure.image, axes.ToPixel(last.x(), last.y()), Marker::kSquare, color_of(k), 9);
-  }
+  DrawTrajectories(axes, trajectories, segments_of, figure.image);
   DrawLegend(figure.image, legend_at, legend);
   return figure;
 }
