@@ -857,80 +857,82 @@ void DrawFeature(cv::Mat& image, const cv::Point2f& pixel, slam::FeatureKind kin
 
 }  // namespace
 
-cv::Mat DrawFeatureKinds(const cv::Mat& color_bgr, const cv::Mat& instance_ids, const slam::FrameResult& result,
-                         const std::string& title) {
-  if (color_bgr.type() != CV_8UC3 || color_bgr.empty()) {
-    throw Error("feature picture: the frame must be CV_8UC3, not " + CvTypeName(color_bgr.type()));
-  }
-  if (!instance_ids.empty()) CheckImage(instance_ids, CV_16U, color_bgr.size(), "feature picture: instance ids");
+namespace {
 
-  // The frame a little desaturated, so the coloured dots stand out.
+// The frame a little desaturated, so coloured dots stand out.
+cv::Mat Desaturated(const cv::Mat& color_bgr) {
   cv::Mat gray, gray_bgr, frame;
   cv::cvtColor(color_bgr, gray, cv::COLOR_BGR2GRAY);
   cv::cvtColor(gray, gray_bgr, cv::COLOR_GRAY2BGR);
   cv::addWeighted(color_bgr, 0.45, gray_bgr, 0.55, 0, frame);
+  return frame;
+}
 
-  // Instances judged moving, outlined and named.
-  int moving_instances = 0;
-  if (!instance_ids.empty()) {
-    for (const slam::InstanceJudgement& judgement : result.instances) {
-      if (!judgement.moving) continue;
-      const cv::Mat mask = instance_ids == judgement.id;
-      std::vector<std::vector<cv::Point>> contours;
-      cv::findContours(mask, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_SIMPLE);
-      if (contours.empty()) continue;
-      ++moving_instances;
-      cv::drawContours(frame, contours, -1, kMovingOutlineColor, 2, cv::LINE_AA);
-      const cv::Rect box = cv::boundingRect(mask);
-      const std::string label = fmt::format("moving #{}", judgement.id);
-      const cv::Size text = TextSize(label, 0.45, 1);
-      cv::Rect tag(box.x, std::max(0, box.y - text.height - 8), text.width + 8, text.height + 8);
-      tag.x = std::clamp(tag.x, 0, std::max(0, frame.cols - tag.width));
-      cv::rectangle(frame, tag, kMovingOutlineColor, cv::FILLED);
-      DrawText(frame, label, {tag.x + 4, tag.y + 4}, 0.45, kWhite, 1, HAlign::kLeft, VAlign::kTop);
-    }
+// Outlines and names each instance judged moving that is in view; returns how many.
+int OutlineMovingInstances(const cv::Mat& instance_ids, const std::vector<slam::InstanceJudgement>& judgements,
+                           cv::Mat& frame) {
+  int outlined = 0;
+  for (const slam::InstanceJudgement& judgement : judgements) {
+    if (!judgement.moving) continue;
+    const cv::Mat mask = instance_ids == judgement.id;
+    std::vector<std::vector<cv::Point>> contours;
+    cv::findContours(mask, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_SIMPLE);
+    if (contours.empty()) continue;
+    ++outlined;
+    cv::drawContours(frame, contours, -1, kMovingOutlineColor, 2, cv::LINE_AA);
+    const cv::Rect box = cv::boundingRect(mask);
+    const std::string label = fmt::format("moving #{}", judgement.id);
+    const cv::Size text = TextSize(label, 0.45, 1);
+    cv::Rect tag(box.x, std::max(0, box.y - text.height - 8), text.width + 8, text.height + 8);
+    tag.x = std::clamp(tag.x, 0, std::max(0, frame.cols - tag.width));
+    cv::rectangle(frame, tag, kMovingOutlineColor, cv::FILLED);
+    DrawText(frame, label, {tag.x + 4, tag.y + 4}, 0.45, kWhite, 1, HAlign::kLeft, VAlign::kTop);
   }
+  return outlined;
+}
 
-  // Features, the informative kinds last so they are on top.
+// Draws the features, the informative kinds last so they are on top; returns the count
+// of each kind.
+std::map<slam::FeatureKind, int> DrawFeatures(const std::vector<slam::FeatureRecord>& records, cv::Mat& frame) {
   const std::array<slam::FeatureKind, 5> kDrawOrder = {slam::FeatureKind::kUnmatched, slam::FeatureKind::kOutlier,
                                                        slam::FeatureKind::kUsed, slam::FeatureKind::kDroppedMoveable,
                                                        slam::FeatureKind::kDroppedMoving};
   std::map<slam::FeatureKind, int> counts;
   for (const slam::FeatureKind kind : kDrawOrder) {
-    for (const slam::FeatureRecord& record : result.feature_records) {
+    for (const slam::FeatureRecord& record : records) {
       if (record.kind != kind) continue;
       ++counts[kind];
       DrawFeatureRim(frame, record.pixel, kind);
     }
-    for (const slam::FeatureRecord& record : result.feature_records) {
+    for (const slam::FeatureRecord& record : records) {
       if (record.kind == kind) DrawFeatureDot(frame, record.pixel, kind);
     }
   }
+  return counts;
+}
 
-  // The legend strip below the frame: title, then one entry per kind, wrapped.
-  struct Entry {
-    std::string text;
-    std::optional<slam::FeatureKind> kind;  // nullopt: the moving outline
-  };
-  std::vector<Entry> entries;
-  for (const slam::FeatureKind kind : {slam::FeatureKind::kUsed, slam::FeatureKind::kDroppedMoving,
-                                       slam::FeatureKind::kDroppedMoveable, slam::FeatureKind::kOutlier,
-                                       slam::FeatureKind::kUnmatched}) {
-    entries.push_back({fmt::format("{} ({})", FeatureKindLegend(kind), counts[kind]), kind});
-  }
-  entries.push_back({fmt::format("instance judged moving ({})", moving_instances), std::nullopt});
+// One entry of the feature picture's legend: a feature kind's sample dot, or (no kind)
+// the moving outline.
+struct FeatureLegendEntry {
+  std::string text;
+  std::optional<slam::FeatureKind> kind;
+};
+
+// The frame above a white strip with `title`, then the entries, wrapped. A frame
+// narrower than the longest entry gets a white band on its right.
+cv::Mat WithFeatureLegend(const cv::Mat& frame, const std::vector<FeatureLegendEntry>& entries,
+                          const std::string& title) {
   constexpr int kEntryGapPx = 22, kSamplePx = 18, kRowPx = 24, kSidePx = 10;
-  // A frame narrower than the longest entry gets a white band on its right.
   int picture_width = frame.cols;
-  for (const Entry& entry : entries) {
+  for (const FeatureLegendEntry& entry : entries) {
     picture_width = std::max(picture_width, 2 * kSidePx + kSamplePx + 6 + TextSize(entry.text, kLegendFontScale, 1).width);
   }
   if (!title.empty()) {
     picture_width = std::max(picture_width, 2 * kSidePx + TextSize(title, kLabelFontScale, 1).width);
   }
-  std::vector<cv::Point> positions;
+  std::vector<cv::Point> positions;  // x in pixels, y the row
   int u = kSidePx, row = 0;
-  for (const Entry& entry : entries) {
+  for (const FeatureLegendEntry& entry : entries) {
     const int width = kSamplePx + 6 + TextSize(entry.text, kLegendFontScale, 1).width;
     if (u > kSidePx && u + width > picture_width - kSidePx) {
       u = kSidePx;
@@ -963,6 +965,29 @@ cv::Mat DrawFeatureKinds(const cv::Mat& color_bgr, const cv::Mat& instance_ids, 
              VAlign::kMiddle);
   }
   return picture;
+}
+
+}  // namespace
+
+cv::Mat DrawFeatureKinds(const cv::Mat& color_bgr, const cv::Mat& instance_ids, const slam::FrameResult& result,
+                         const std::string& title) {
+  if (color_bgr.type() != CV_8UC3 || color_bgr.empty()) {
+    throw Error("feature picture: the frame must be CV_8UC3, not " + CvTypeName(color_bgr.type()));
+  }
+  if (!instance_ids.empty()) CheckImage(instance_ids, CV_16U, color_bgr.size(), "feature picture: instance ids");
+
+  cv::Mat frame = Desaturated(color_bgr);
+  const int moving_instances = instance_ids.empty() ? 0 : OutlineMovingInstances(instance_ids, result.instances, frame);
+  std::map<slam::FeatureKind, int> counts = DrawFeatures(result.feature_records, frame);
+
+  std::vector<FeatureLegendEntry> entries;
+  for (const slam::FeatureKind kind : {slam::FeatureKind::kUsed, slam::FeatureKind::kDroppedMoving,
+                                       slam::FeatureKind::kDroppedMoveable, slam::FeatureKind::kOutlier,
+                                       slam::FeatureKind::kUnmatched}) {
+    entries.push_back({fmt::format("{} ({})", FeatureKindLegend(kind), counts[kind]), kind});
+  }
+  entries.push_back({fmt::format("instance judged moving ({})", moving_instances), std::nullopt});
+  return WithFeatureLegend(frame, entries, title);
 }
 
 std::optional<std::size_t> PickFeatureFigureFrame(const std::vector<slam::FrameResult>& results) {
