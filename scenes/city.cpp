@@ -968,142 +968,182 @@ class CityBuilder {
     }
   }
 
+  // The lanes moving cars drive, as polylines extended 300 m at both ends so that no
+  // path ends while in view.
+  struct CarLanes {
+    static constexpr double kExtensionM = 300.0;
+    Poly2 forward;   // the camera's lane
+    Poly2 same;      // cars ahead: the inner lane when the road has two, else the camera's
+    Poly2 opposite;  // oncoming
+    double f0;       // arc on `forward` of the camera's start
+    bool two_lanes;
+  };
+
+  CarLanes MakeCarLanes() const {
+    const double ext = CarLanes::kExtensionM;
+    const std::vector<Node> fnodes = RouteNodes();
+    const std::vector<Node> gnodes(fnodes.rbegin(), fnodes.rend());
+    // A second lane in the camera's direction when the road is wide enough.
+    const double inner_lane = lane_ - 3.3;
+    const bool two_lanes = inner_lane >= 1.4;
+    const double same_offset = two_lanes ? inner_lane : lane_;
+    return {Poly2(NodeLane(fnodes, lane_, ext, ext)), Poly2(NodeLane(fnodes, same_offset, ext, ext)),
+            Poly2(NodeLane(gnodes, same_offset + 0.1, ext, ext)), ext + block_ / 2, two_lanes};
+  }
+
+  // An intersection the camera approaches during the pass, with its route arc length.
+  struct Crossing {
+    Node node;
+    Vec2 arrive;  // direction the camera arrives in
+    double s;
+  };
+
+  std::vector<Crossing> CrossingsOnRoute(const CarLanes& lanes) const {
+    std::vector<Crossing> crossings;
+    for (std::size_t k = 0; k < nodes_.size(); ++k) {
+      const double s = lanes.forward.Closest(NodePos(nodes_[k])) - lanes.f0;
+      if (s > 16.0 && s < lane_s_.back() + 20.0) crossings.push_back({nodes_[k], kStreetDirs[dirs_[k]], s});
+    }
+    return crossings;
+  }
+
+  // Route arc length of the camera's turns.
+  std::vector<double> TurnsOnRoute(const CarLanes& lanes) const {
+    std::vector<double> turns;
+    for (std::size_t k = 1; k + 1 < nodes_.size(); ++k) {
+      if (dirs_[k] != dirs_[k + 1]) turns.push_back(lanes.forward.Closest(NodePos(nodes_[k])) - lanes.f0);
+    }
+    return turns;
+  }
+
+  enum class CarRole { kAhead, kOncoming, kCrossing };
+
+  // Roles in turn: ahead, oncoming, crossing, second ahead, then oncoming and crossing.
+  // A one-lane queue ahead would run into the vehicles the camera waits behind at red
+  // lights, so with those the camera's lane holds only them. Without an intersection
+  // ahead on the route, crossing cars come oncoming instead.
+  std::vector<CarRole> MovingCarRoles(bool two_lanes, bool any_crossing) const {
+    const bool leads = std::any_of(red_lights_.begin(), red_lights_.end(),
+                                   [](const RedLight& r) { return !r.lead_kind.empty(); });
+    const bool queue_ahead = two_lanes || !leads;
+    const CarRole pattern[] = {CarRole::kAhead, CarRole::kOncoming, CarRole::kCrossing,
+                               CarRole::kAhead, CarRole::kOncoming, CarRole::kCrossing};
+    std::vector<CarRole> roles;
+    for (int k = 0; k < spec_.moving_cars; ++k) {
+      CarRole role = k < 6 ? pattern[k] : (k % 2 == 0 ? CarRole::kOncoming : CarRole::kCrossing);
+      if (role == CarRole::kAhead && !queue_ahead) role = CarRole::kOncoming;
+      if (role == CarRole::kCrossing && !any_crossing) role = CarRole::kOncoming;
+      roles.push_back(role);
+    }
+    return roles;
+  }
+
+  // Ahead in the camera's direction, attempt `a` of its placement. Two lanes: in the
+  // inner one at about the traffic's speed. One lane: a queue in front of the camera,
+  // each car (rank 0 first) at least as fast as the one behind it, which is placed at
+  // `previous_gap` ahead of the camera with `previous_speed`.
+  PathMotion AheadMotion(std::mt19937_64& rng, const CarLanes& lanes, int rank, double half_length, int a,
+                         double previous_gap, double previous_speed) const {
+    PathMotion p = DrivePath(lanes.same.p);
+    if (lanes.two_lanes) {
+      p.speed_mps = spec_.moving_car_speed_mps * Uniform(rng, 0.9, 1.2);
+      p.start_offset_m = lanes.f0 + Uniform(rng, 5.0, 25.0);
+      return p;
+    }
+    const double slack = 0.05 * a;
+    if (rank == 0) {
+      p.speed_mps = std::max(spec_.camera_speed_mps, spec_.moving_car_speed_mps) * Uniform(rng, 1.0, 1.04 + slack);
+      p.start_offset_m = lanes.f0 + Uniform(rng, 7.5, 10.0 + 2 * a) + (half_length - 2.45);
+    } else {
+      p.speed_mps = previous_speed * Uniform(rng, 1.0, 1.03 + slack);
+      p.start_offset_m = lanes.f0 + previous_gap + Uniform(rng, 11.0, 16.0 + 2 * a) + (half_length - 2.45);
+    }
+    return p;
+  }
+
+  // Oncoming: meets the camera at a route position spread over the route (by rank among
+  // `count` oncoming cars for the first ten attempts), not in a turn, where it would pass
+  // beside the camera out of view.
+  PathMotion OncomingMotion(std::mt19937_64& rng, const CarLanes& lanes, const std::vector<double>& turns, int rank,
+                            int count, int a) const {
+    PathMotion p = DrivePath(lanes.opposite.p);
+    p.speed_mps = spec_.moving_car_speed_mps * Uniform(rng, 0.85, 1.15);
+    const double lo = 10.0, hi = lane_s_.back() - 5.0;
+    const double u = a < 10 ? (rank + Uniform(rng, 0.15, 0.85)) / count : Uniform(rng, 0, 1);
+    double s_meet = lo + (hi - lo) * u;
+    for (double s_turn : turns) {
+      if (std::abs(s_meet - s_turn) < 15.0) s_meet = s_turn + (s_meet < s_turn ? -15.0 : 15.0);
+    }
+    const double q_meet = lanes.opposite.Closest(lanes.forward.At(lanes.f0 + s_meet));
+    p.start_offset_m = q_meet - p.speed_mps * CameraTimeAt(s_meet);
+    return p;
+  }
+
+  // Crossing: through an intersection ahead while the camera is 12-32 m before it; with
+  // red lights, through one where the camera stands, while it stands. The first ten
+  // attempts spread the cars over the intersections by rank among `count`.
+  PathMotion CrossingMotion(std::mt19937_64& rng, const std::vector<Crossing>& crossings, int rank, int count,
+                            int a) const {
+    const double ext = CarLanes::kExtensionM;
+    if (!red_lights_.empty()) {
+      const std::size_t pick = a < 10 ? (rank + a / 3) % red_lights_.size()
+                                      : UniformInt(rng, 0, static_cast<int>(red_lights_.size()) - 1);
+      const RedLight& r = red_lights_[pick];
+      const Vec2 d = Right(r.arrive) * (Chance(rng, 0.5) ? 1.0 : -1.0);
+      const Vec2 centre = NodePos(nodes_[r.node]) + Right(d) * lane_;
+      PathMotion p = DrivePath({centre - d * ext, centre + d * ext});
+      p.speed_mps = spec_.moving_car_speed_mps * Uniform(rng, 0.85, 1.15);
+      const double t_cross = Uniform(rng, r.stand_from_s + 0.5, r.stand_until_s - 0.5);
+      p.start_offset_m = ext - p.speed_mps * t_cross;
+      return p;
+    }
+    const Crossing& c = crossings[a < 10 ? (rank * crossings.size() / std::max(1, count) + a / 3) % crossings.size()
+                                         : UniformInt(rng, 0, static_cast<int>(crossings.size()) - 1)];
+    const Vec2 d = Right(c.arrive) * (Chance(rng, 0.5) ? 1.0 : -1.0);
+    const Vec2 centre = NodePos(c.node) + Right(d) * lane_;
+    PathMotion p = DrivePath({centre - d * ext, centre + d * ext});
+    p.speed_mps = spec_.moving_car_speed_mps * Uniform(rng, 0.85, 1.15);
+    const double t_cross = CameraTimeAt(std::max(0.0, c.s - Uniform(rng, 12.0, 32.0)));
+    p.start_offset_m = ext - p.speed_mps * t_cross;
+    return p;
+  }
+
   // Moving cars on the streets of the route: ahead of the camera in its direction of
   // travel (the other lane if there are two, else its own lane, never slower than the
   // camera), oncoming in the opposite lane, and crossing at the route's intersections.
   void MakeMovingCars(const Traffic& traffic) {
     std::mt19937_64 rng = Rng("moving_cars" + traffic.tag);
     if (spec_.moving_cars <= 0) return;
-    const double ext = 300.0;  // straight extensions, so no path ends while in view
-    const double v_cam = spec_.camera_speed_mps;
-    const double route_len = lane_s_.back();
-    const std::vector<Node> fnodes = RouteNodes();
-    std::vector<Node> gnodes(fnodes.rbegin(), fnodes.rend());
-    const Poly2 forward(NodeLane(fnodes, lane_, ext, ext));
-    const double f0 = ext + block_ / 2;  // arc on `forward` of the camera's start
-    // A second lane in the camera's direction when the road is wide enough.
-    const double inner_lane = lane_ - 3.3;
-    const bool two_lanes = inner_lane >= 1.4;
-    const Poly2 same(NodeLane(fnodes, two_lanes ? inner_lane : lane_, ext, ext));
-    const double opposite_offset = (two_lanes ? inner_lane : lane_) + 0.1;
-    const Poly2 opposite(NodeLane(gnodes, opposite_offset, ext, ext));
-
-    // Intersections the camera approaches during the pass, with their route arc length.
-    struct Crossing {
-      Node node;
-      Vec2 arrive;  // direction the camera arrives in
-      double s;
-    };
-    std::vector<Crossing> crossings;
-    for (std::size_t k = 0; k < nodes_.size(); ++k) {
-      const double s = forward.Closest(NodePos(nodes_[k])) - f0;
-      if (s > 16.0 && s < route_len + 20.0) crossings.push_back({nodes_[k], kStreetDirs[dirs_[k]], s});
-    }
-
-    std::vector<double> turns;  // route arc length of the turns
-    for (std::size_t k = 1; k + 1 < nodes_.size(); ++k) {
-      if (dirs_[k] != dirs_[k + 1]) turns.push_back(forward.Closest(NodePos(nodes_[k])) - f0);
-    }
-
-    // Roles in turn: ahead, oncoming, crossing, second ahead, then oncoming and crossing.
-    // A one-lane queue ahead would run into the vehicles the camera waits behind at red
-    // lights, so with those the camera's lane holds only them.
-    const bool leads = std::any_of(red_lights_.begin(), red_lights_.end(),
-                                   [](const RedLight& r) { return !r.lead_kind.empty(); });
-    const bool queue_ahead = two_lanes || !leads;
-    const int n = spec_.moving_cars;
-    std::vector<int> roles;
-    const int pattern[] = {0, 1, 2, 0, 1, 2};
-    for (int k = 0; k < n; ++k) {
-      const int role = k < 6 ? pattern[k] : 1 + k % 2;
-      roles.push_back(role == 0 && !queue_ahead ? 1 : role);
-    }
-    MakeRedLightLeads(fnodes, traffic);
+    const CarLanes lanes = MakeCarLanes();
+    const std::vector<Crossing> crossings = CrossingsOnRoute(lanes);
+    const std::vector<double> turns = TurnsOnRoute(lanes);
+    const std::vector<CarRole> roles = MovingCarRoles(lanes.two_lanes, !crossings.empty());
+    MakeRedLightLeads(RouteNodes(), traffic);
+    const int n_oncoming = static_cast<int>(std::count(roles.begin(), roles.end(), CarRole::kOncoming));
+    const int n_crossing = static_cast<int>(std::count(roles.begin(), roles.end(), CarRole::kCrossing));
     int ahead = 0, oncoming = 0, crossing = 0;
-    const int n_oncoming = static_cast<int>(std::count(roles.begin(), roles.end(), 1));
-    const int n_crossing = static_cast<int>(std::count(roles.begin(), roles.end(), 2));
     double ahead_gap = 0, ahead_speed = 0;  // of the last car placed ahead
-    for (int k = 0; k < n; ++k) {
-      int role = roles[k];
-      if (role == 2 && crossings.empty()) role = 1;
-      const bool lead = role == 0 && !two_lanes;
-      Object& o = b_.AddObject(lead ? "car" : VehicleKind(rng, role != 0));
+    for (const CarRole role : roles) {
+      // In a one-lane queue ahead every car is a car: a bus there would block the view.
+      const bool queued = role == CarRole::kAhead && !lanes.two_lanes;
+      Object& o = b_.AddObject(queued ? "car" : VehicleKind(rng, role != CarRole::kAhead));
       o.parts.push_back(MakeVehicle(rng, o.category_name));
       double hl, hw;
       VehicleSize(o.category_name, &hl, &hw);
       const int index = static_cast<int>(world_.objects.size()) - 1;
       std::function<PathMotion(int)> make;
-      if (role == 0) {
-        // Ahead in the camera's direction. One lane: a queue in front of the camera,
-        // each car at least as fast as the one behind it.
-        const int rank = ahead++;
-        make = [&, rank, hl](int a) {
-          PathMotion p = DrivePath(same.p);
-          if (two_lanes) {
-            p.speed_mps = spec_.moving_car_speed_mps * Uniform(rng, 0.9, 1.2);
-            p.start_offset_m = f0 + Uniform(rng, 5.0, 25.0);
-            return p;
-          }
-          const double slack = 0.05 * a;
-          if (rank == 0) {
-            p.speed_mps = std::max(v_cam, spec_.moving_car_speed_mps) * Uniform(rng, 1.0, 1.04 + slack);
-            p.start_offset_m = f0 + Uniform(rng, 7.5, 10.0 + 2 * a) + (hl - 2.45);
-          } else {
-            p.speed_mps = ahead_speed * Uniform(rng, 1.0, 1.03 + slack);
-            p.start_offset_m = f0 + ahead_gap + Uniform(rng, 11.0, 16.0 + 2 * a) + (hl - 2.45);
-          }
-          return p;
-        };
-      } else if (role == 1) {
-        // Oncoming: meets the camera at a route position spread over the route.
-        const int rank = oncoming++;
-        make = [&, rank, n_oncoming](int a) {
-          PathMotion p = DrivePath(opposite.p);
-          p.speed_mps = spec_.moving_car_speed_mps * Uniform(rng, 0.85, 1.15);
-          const double lo = 10.0, hi = route_len - 5.0;
-          const double u = a < 10 ? (rank + Uniform(rng, 0.15, 0.85)) / n_oncoming : Uniform(rng, 0, 1);
-          double s_meet = lo + (hi - lo) * u;
-          // Not in a turn, where the car would pass beside the camera out of view.
-          for (double s_turn : turns) {
-            if (std::abs(s_meet - s_turn) < 15.0) s_meet = s_turn + (s_meet < s_turn ? -15.0 : 15.0);
-          }
-          const double q_meet = opposite.Closest(forward.At(f0 + s_meet));
-          p.start_offset_m = q_meet - p.speed_mps * CameraTimeAt(s_meet);
-          return p;
-        };
+      if (role == CarRole::kAhead) {
+        make = [&, rank = ahead++, hl](int a) { return AheadMotion(rng, lanes, rank, hl, a, ahead_gap, ahead_speed); };
+      } else if (role == CarRole::kOncoming) {
+        make = [&, rank = oncoming++](int a) { return OncomingMotion(rng, lanes, turns, rank, n_oncoming, a); };
       } else {
-        // Crossing: through an intersection ahead while the camera is 12-32 m before it;
-        // with red lights, through one where the camera stands, while it stands.
-        const int rank = crossing++;
-        make = [&, rank, n_crossing](int a) {
-          if (!red_lights_.empty()) {
-            const std::size_t pick = a < 10 ? (rank + a / 3) % red_lights_.size()
-                                            : UniformInt(rng, 0, static_cast<int>(red_lights_.size()) - 1);
-            const RedLight& r = red_lights_[pick];
-            const Vec2 d = Right(r.arrive) * (Chance(rng, 0.5) ? 1.0 : -1.0);
-            const Vec2 centre = NodePos(nodes_[r.node]) + Right(d) * lane_;
-            PathMotion p = DrivePath({centre - d * ext, centre + d * ext});
-            p.speed_mps = spec_.moving_car_speed_mps * Uniform(rng, 0.85, 1.15);
-            const double t_cross = Uniform(rng, r.stand_from_s + 0.5, r.stand_until_s - 0.5);
-            p.start_offset_m = ext - p.speed_mps * t_cross;
-            return p;
-          }
-          const Crossing& c = crossings[a < 10 ? (rank * crossings.size() / std::max(1, n_crossing) + a / 3) % crossings.size()
-                                               : UniformInt(rng, 0, static_cast<int>(crossings.size()) - 1)];
-          const Vec2 d = Right(c.arrive) * (Chance(rng, 0.5) ? 1.0 : -1.0);
-          const Vec2 centre = NodePos(c.node) + Right(d) * lane_;
-          PathMotion p = DrivePath({centre - d * ext, centre + d * ext});
-          p.speed_mps = spec_.moving_car_speed_mps * Uniform(rng, 0.85, 1.15);
-          const double t_cross = CameraTimeAt(std::max(0.0, c.s - Uniform(rng, 12.0, 32.0)));
-          p.start_offset_m = ext - p.speed_mps * t_cross;
-          return p;
-        };
+        make = [&, rank = crossing++](int a) { return CrossingMotion(rng, crossings, rank, n_crossing, a); };
       }
       PlaceMover(index, traffic.present, hl, hw, /*car=*/true, /*min_camera_m=*/3.15, 40, make);
-      if (role == 0 && !two_lanes) {
+      if (queued) {
         const PathMotion& placed = world_.objects[index].placement[traffic.present[0] ? 0 : 1].path;
         ahead_speed = placed.speed_mps;
-        ahead_gap = placed.start_offset_m - f0;
+        ahead_gap = placed.start_offset_m - lanes.f0;
       }
     }
   }
