@@ -255,8 +255,9 @@ OrbExtractor::OrbExtractor(const OrbExtractorOptions& options) : options_(option
   }
 }
 
-FrameFeatures OrbExtractor::Extract(const cv::Mat& gray, const cv::Mat& depth_m,
-                                    const PinholeCamera& camera) const {
+namespace {
+
+void CheckExtractInput(const cv::Mat& gray, const cv::Mat& depth_m, const PinholeCamera& camera) {
   std::string reason;
   if (!camera.IsValid(&reason)) throw Error("OrbExtractor::Extract: invalid camera: " + reason);
   if (gray.empty() || gray.type() != CV_8UC1) {
@@ -267,17 +268,62 @@ FrameFeatures OrbExtractor::Extract(const cv::Mat& gray, const cv::Mat& depth_m,
     throw Error(fmt::format("OrbExtractor::Extract: image is {}x{} but the camera is {}x{}",
                             gray.cols, gray.rows, camera.width, camera.height));
   }
-  if (!depth_m.empty()) {
-    if (depth_m.type() != CV_32FC1) {
-      throw Error(fmt::format("OrbExtractor::Extract: depth must be CV_32FC1 metres, got {}",
-                              cv::typeToString(depth_m.type())));
-    }
-    if (depth_m.size() != gray.size()) {
-      throw Error(fmt::format("OrbExtractor::Extract: depth is {}x{} but the image is {}x{}",
-                              depth_m.cols, depth_m.rows, gray.cols, gray.rows));
+  if (depth_m.empty()) return;
+  if (depth_m.type() != CV_32FC1) {
+    throw Error(fmt::format("OrbExtractor::Extract: depth must be CV_32FC1 metres, got {}",
+                            cv::typeToString(depth_m.type())));
+  }
+  if (depth_m.size() != gray.size()) {
+    throw Error(fmt::format("OrbExtractor::Extract: depth is {}x{} but the image is {}x{}",
+                            depth_m.cols, depth_m.rows, gray.cols, gray.rows));
+  }
+}
+
+// Gives each keypoint with a depth in [min_depth_m, max_depth_m] at its nearest pixel
+// that depth and its back-projected point; the others keep 0 and the origin.
+void AttachDepth(const cv::Mat& depth_m, const PinholeCamera& camera, const OrbExtractorOptions& options,
+                 FrameFeatures* features) {
+  const size_t n = features->keypoints.size();
+  features->depth_m.assign(n, 0.0f);
+  features->points_cam.assign(n, Eigen::Vector3d::Zero());
+  if (depth_m.empty()) return;
+  for (size_t i = 0; i < n; ++i) {
+    const cv::Point2f& pt = features->keypoints[i].pt;
+    const int x = std::clamp(cvRound(pt.x), 0, depth_m.cols - 1);
+    const int y = std::clamp(cvRound(pt.y), 0, depth_m.rows - 1);
+    const float d = depth_m.at<float>(y, x);
+    // The comparisons are false for NaN, which thus counts as missing.
+    if (d >= options.min_depth_m && d <= options.max_depth_m) {
+      features->depth_m[i] = d;
+      features->points_cam[i] = camera.BackProject(Eigen::Vector2d(pt.x, pt.y), d);
     }
   }
+}
 
+}  // namespace
+
+std::vector<cv::KeyPoint> OrbExtractor::DetectLevel(const cv::Mat& level_image, int level) const {
+  const cv::Rect region(kBorderPx, kBorderPx, level_image.cols - 2 * kBorderPx,
+                        level_image.rows - 2 * kBorderPx);
+  const std::vector<Corner> corners = DetectCornersInCells(level_image, region, options_);
+  const std::vector<int> selected = DistributeByQuadtree(
+      corners, static_cast<float>(region.x), static_cast<float>(region.y),
+      static_cast<float>(region.x + region.width), static_cast<float>(region.y + region.height),
+      features_per_level_[level]);
+  std::vector<cv::KeyPoint> keypoints;
+  keypoints.reserve(selected.size());
+  for (int index : selected) {
+    const Corner& c = corners[index];
+    keypoints.emplace_back(cv::Point2f(static_cast<float>(c.x), static_cast<float>(c.y)),
+                           static_cast<float>(kPatchSizePx),
+                           IntensityCentroidAngle(level_image, c.x, c.y, circle_half_widths_), c.response, 0);
+  }
+  return keypoints;
+}
+
+FrameFeatures OrbExtractor::Extract(const cv::Mat& gray, const cv::Mat& depth_m,
+                                    const PinholeCamera& camera) const {
+  CheckExtractInput(gray, depth_m, camera);
   FrameFeatures features;
   std::vector<cv::Mat> level_descriptors;
   cv::Mat level_image = gray;
@@ -294,30 +340,14 @@ FrameFeatures OrbExtractor::Extract(const cv::Mat& gray, const cv::Mat& depth_m,
       cv::resize(level_image, next, size, 0, 0, cv::INTER_LINEAR);
       level_image = next;
     }
-    const cv::Rect region(kBorderPx, kBorderPx, level_image.cols - 2 * kBorderPx,
-                          level_image.rows - 2 * kBorderPx);
-    if (region.width <= 0 || region.height <= 0) break;
+    if (level_image.cols <= 2 * kBorderPx || level_image.rows <= 2 * kBorderPx) break;
 
-    const std::vector<Corner> corners = DetectCornersInCells(level_image, region, options_);
-    const std::vector<int> selected = DistributeByQuadtree(
-        corners, static_cast<float>(region.x), static_cast<float>(region.y),
-        static_cast<float>(region.x + region.width), static_cast<float>(region.y + region.height),
-        features_per_level_[level]);
-    if (selected.empty()) continue;
-
-    std::vector<cv::KeyPoint> level_keypoints;
-    level_keypoints.reserve(selected.size());
-    for (int index : selected) {
-      const Corner& c = corners[index];
-      level_keypoints.emplace_back(
-          cv::Point2f(static_cast<float>(c.x), static_cast<float>(c.y)),
-          static_cast<float>(kPatchSizePx),
-          IntensityCentroidAngle(level_image, c.x, c.y, circle_half_widths_), c.response, 0);
-    }
+    std::vector<cv::KeyPoint> level_keypoints = DetectLevel(level_image, level);
+    if (level_keypoints.empty()) continue;
+    const size_t detected = level_keypoints.size();
     cv::Mat descriptors;
     orb->compute(level_image, level_keypoints, descriptors);
-    if (level_keypoints.size() != selected.size() ||
-        descriptors.rows != static_cast<int>(selected.size())) {
+    if (level_keypoints.size() != detected || descriptors.rows != static_cast<int>(detected)) {
       // Cannot happen while kBorderPx matches cv::ORB's edge threshold; a silent
       // keypoint/descriptor mismatch would corrupt every match downstream.
       throw Error("OrbExtractor::Extract: cv::ORB dropped keypoints inside the border");
@@ -341,23 +371,7 @@ FrameFeatures OrbExtractor::Extract(const cv::Mat& gray, const cv::Mat& depth_m,
   } else {
     cv::vconcat(level_descriptors, features.descriptors);
   }
-
-  const size_t n = features.keypoints.size();
-  features.depth_m.assign(n, 0.0f);
-  features.points_cam.assign(n, Eigen::Vector3d::Zero());
-  if (!depth_m.empty()) {
-    for (size_t i = 0; i < n; ++i) {
-      const cv::Point2f& pt = features.keypoints[i].pt;
-      const int x = std::clamp(cvRound(pt.x), 0, depth_m.cols - 1);
-      const int y = std::clamp(cvRound(pt.y), 0, depth_m.rows - 1);
-      const float d = depth_m.at<float>(y, x);
-      // The comparisons are false for NaN, which thus counts as missing.
-      if (d >= options_.min_depth_m && d <= options_.max_depth_m) {
-        features.depth_m[i] = d;
-        features.points_cam[i] = camera.BackProject(Eigen::Vector2d(pt.x, pt.y), d);
-      }
-    }
-  }
+  AttachDepth(depth_m, camera, options_, &features);
   return features;
 }
 

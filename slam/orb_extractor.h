@@ -65,6 +65,10 @@ class OrbExtractor {
   static constexpr int kPatchSizePx = 31;
 
  private:
+  // The keypoints of one pyramid level, in that level's pixels: corners detected per
+  // cell, kept by the quadtree up to the level's budget, each with its orientation.
+  std::vector<cv::KeyPoint> DetectLevel(const cv::Mat& level_image, int level) const;
+
   OrbExtractorOptions options_;
   std::vector<float> scale_factors_;
   std::vector<float> level_sigma2_;
