@@ -964,73 +964,84 @@ struct Tracker::Impl {
     recent_points = std::move(kept);
   }
 
-  void LocalBundleAdjustment() {
+  // The newest good keyframes, newest first: local bundle adjustment's free poses.
+  std::vector<Keyframe*> LocalWindow() const {
     std::vector<Keyframe*> window;
     const auto& keyframes = map->keyframes();
     for (auto it = keyframes.rbegin(); it != keyframes.rend() && static_cast<int>(window.size()) < options.local_ba_keyframes; ++it) {
       if (!(*it)->bad) window.push_back(it->get());
     }
-    if (window.size() < 2) return;
-    std::map<Keyframe*, int, KeyframeIdLess> keyframe_index;
-    std::vector<BaKeyframe> ba_keyframes;
-    for (Keyframe* keyframe : window) {
-      keyframe_index[keyframe] = -1;
-    }
-    std::vector<MapPoint*> points;
+    return window;
+  }
+
+  // Local bundle adjustment's problem over a window: its keyframes and the good points
+  // they see are free; the other keyframes that see those points hold the window in
+  // place, and so does the map's first keyframe.
+  struct LocalBaProblem {
+    std::map<Keyframe*, int, KeyframeIdLess> keyframe_index;  // into `keyframes`
+    std::vector<BaKeyframe> keyframes;
+    std::vector<MapPoint*> points;  // ascending id
+    std::vector<Eigen::Vector3d> positions;  // of `points`
+    std::vector<BaObservation> observations;
+    std::vector<std::pair<MapPoint*, Keyframe*>> observation_owner;  // of `observations`
+  };
+
+  LocalBaProblem MakeLocalBaProblem(const std::vector<Keyframe*>& window) const {
+    LocalBaProblem problem;
+    for (Keyframe* keyframe : window) problem.keyframe_index[keyframe] = -1;
     std::set<std::uint64_t> seen;
     for (Keyframe* keyframe : window) {
       for (MapPoint* point : keyframe->points) {
         if (point == nullptr || point->bad || point->fixed || !seen.insert(point->id).second) continue;
-        points.push_back(point);
+        problem.points.push_back(point);
       }
     }
-    std::sort(points.begin(), points.end(), [](const MapPoint* a, const MapPoint* b) { return a->id < b->id; });
-    const std::uint64_t first_keyframe_id = keyframes.front()->id;
-    // Keyframes outside the window that see these points hold the window in place.
-    for (MapPoint* point : points) {
-      for (const auto& observation : point->observations) keyframe_index.emplace(observation.first, -1);
+    std::sort(problem.points.begin(), problem.points.end(),
+              [](const MapPoint* a, const MapPoint* b) { return a->id < b->id; });
+    for (MapPoint* point : problem.points) {
+      for (const auto& observation : point->observations) problem.keyframe_index.emplace(observation.first, -1);
     }
+    const std::uint64_t first_keyframe_id = map->keyframes().front()->id;
     bool any_fixed = false;
-    for (auto& [keyframe, index] : keyframe_index) {
+    for (auto& [keyframe, index] : problem.keyframe_index) {
       const bool in_window = std::find(window.begin(), window.end(), keyframe) != window.end();
       const bool fixed = !in_window || keyframe->id == first_keyframe_id;
       any_fixed = any_fixed || fixed;
-      index = static_cast<int>(ba_keyframes.size());
-      ba_keyframes.push_back({keyframe->T_cw, fixed});
+      index = static_cast<int>(problem.keyframes.size());
+      problem.keyframes.push_back({keyframe->T_cw, fixed});
     }
-    if (!any_fixed) ba_keyframes.front().fixed = true;  // the oldest fixes the gauge
+    if (!any_fixed) problem.keyframes.front().fixed = true;  // the oldest fixes the gauge
 
-    std::vector<Eigen::Vector3d> positions;
-    std::vector<BaObservation> observations;
-    std::vector<std::pair<MapPoint*, Keyframe*>> observation_owner;
     const auto& inverse_sigma2 = extractor.inverse_level_sigma2();
-    for (size_t p = 0; p < points.size(); ++p) {
-      positions.push_back(points[p]->position_w);
-      for (const auto& [keyframe, feature] : points[p]->observations) {
+    for (size_t p = 0; p < problem.points.size(); ++p) {
+      MapPoint* point = problem.points[p];
+      problem.positions.push_back(point->position_w);
+      for (const auto& [keyframe, feature] : point->observations) {
         const cv::KeyPoint& kp = keyframe->features.keypoints[static_cast<size_t>(feature)];
         BaObservation observation;
-        observation.keyframe = keyframe_index.at(keyframe);
+        observation.keyframe = problem.keyframe_index.at(keyframe);
         observation.point = static_cast<int>(p);
         observation.pixel = Eigen::Vector2d(kp.pt.x, kp.pt.y);
         const float depth = keyframe->features.depth_m[static_cast<size_t>(feature)];
         if (depth > 0) observation.right_u = kp.pt.x - bf / depth;
         observation.information = inverse_sigma2[static_cast<size_t>(kp.octave)];
-        observations.push_back(observation);
-        observation_owner.emplace_back(points[p], keyframe);
+        problem.observations.push_back(observation);
+        problem.observation_owner.emplace_back(point, keyframe);
       }
     }
-    if (observations.empty()) return;
-    BundleAdjustmentOptions ba_options;
-    ba_options.bf = bf;
-    const BundleAdjustmentResult adjusted =
-        RunBundleAdjustment(camera, ba_keyframes, positions, observations, ba_options);
-    for (const auto& [keyframe, index] : keyframe_index) {
-      if (!ba_keyframes[static_cast<size_t>(index)].fixed) keyframe->T_cw = adjusted.T_cw[static_cast<size_t>(index)];
+    return problem;
+  }
+
+  // Moves the free keyframes and the points to the adjusted values and unlinks the
+  // observations the adjustment found to be outliers (a point left unobserved is bad).
+  void ApplyLocalBa(const LocalBaProblem& problem, const BundleAdjustmentResult& adjusted) {
+    for (const auto& [keyframe, index] : problem.keyframe_index) {
+      if (!problem.keyframes[static_cast<size_t>(index)].fixed) keyframe->T_cw = adjusted.T_cw[static_cast<size_t>(index)];
     }
-    for (size_t p = 0; p < points.size(); ++p) points[p]->position_w = adjusted.points_w[p];
-    for (size_t k = 0; k < observations.size(); ++k) {
+    for (size_t p = 0; p < problem.points.size(); ++p) problem.points[p]->position_w = adjusted.points_w[p];
+    for (size_t k = 0; k < problem.observations.size(); ++k) {
       if (adjusted.observation_inlier[k]) continue;
-      auto [point, keyframe] = observation_owner[k];
+      auto [point, keyframe] = problem.observation_owner[k];
       const auto found = point->observations.find(keyframe);
       if (found == point->observations.end()) continue;
       if (keyframe->points[static_cast<size_t>(found->second)] == point) {
@@ -1039,9 +1050,20 @@ struct Tracker::Impl {
       point->observations.erase(found);
       if (point->observations.empty()) Map::MarkBad(point);
     }
-    for (MapPoint* point : points) {
+    for (MapPoint* point : problem.points) {
       if (!point->bad) Map::UpdatePointStatistics(point, extractor);
     }
+  }
+
+  void LocalBundleAdjustment() {
+    const std::vector<Keyframe*> window = LocalWindow();
+    if (window.size() < 2) return;
+    const LocalBaProblem problem = MakeLocalBaProblem(window);
+    if (problem.observations.empty()) return;
+    BundleAdjustmentOptions ba_options;
+    ba_options.bf = bf;
+    ApplyLocalBa(problem, RunBundleAdjustment(camera, problem.keyframes, problem.positions, problem.observations,
+                                              ba_options));
     // The current frame's pose moves with its keyframe.
     current.T_cw = reference_keyframe->T_cw;
   }
