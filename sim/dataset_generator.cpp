@@ -264,6 +264,131 @@ double KindDefaultMaxDepth(const scenes::World& world) {
   return world.kind == "office" ? 8.0 : 60.0;
 }
 
+// Files of one pass beside its frames: the instance table, COCO annotations, object
+// tracks, the scenario and the manifest.
+void WritePassMetadata(const fs::path& pass_dir, const scenes::World& world, const scenes::Scenario& scenario,
+                       scenes::Pass pass, const InstanceTable& instances, const std::vector<FrameRecord>& records) {
+  instances.Write(pass_dir / "instances.json");
+  WriteFileAtomically(pass_dir / "annotations_coco.json", CocoAnnotations(world, instances, records).dump() + "\n");
+  WriteTracks(pass_dir / "tracks.json", ObjectTracks(world, pass, records));
+  WriteFileAtomically(pass_dir / "scenario.yaml", scenario.text);
+  WriteManifest(pass_dir, {{"scenario", scenario.name},
+                           {"seed", scenario.seed},
+                           {"pass", scenes::PassName(pass)},
+                           {"frames", static_cast<int>(records.size())}});
+}
+
+// One generation: the world, its renderer and sensor, shared by both passes.
+class DatasetGeneration {
+ public:
+  DatasetGeneration(const scenes::Scenario& scenario, const fs::path& out_dir, const GenerateOptions& options,
+                    const ProgressCallback& progress)
+      : scenario_(scenario),
+        options_(options),
+        progress_(progress),
+        world_(scenes::BuildWorld(scenario)),
+        staging_(options.write_files ? std::optional<StagingDirectory>(std::in_place, out_dir, options.overwrite)
+                                     : std::nullopt),
+        renderer_(world_, options.backend, options.render),
+        sensor_(scenario.sensor, renderer_.intrinsics(), KindDefaultMaxDepth(world_), world_.camera.fps),
+        sequence_camera_{renderer_.intrinsics(), world_.camera.depth_factor},
+        threads_(options.encode_threads > 0 ? options.encode_threads
+                                            : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()))) {
+    summary_.gl_renderer = renderer_.gl_renderer();
+  }
+
+  GenerateSummary Run() {
+    for (scenes::Pass pass : scenes::kBothPasses) GeneratePass(pass);
+    if (staging_) {
+      WriteFileAtomically(staging_->path() / "scenario.yaml", scenario_.text);
+      WriteManifest(staging_->path(), {{"scenario", scenario_.name},
+                                       {"seed", scenario_.seed},
+                                       {"kind", world_.kind},
+                                       {"generator", "segslam generate"}});
+      staging_->Commit();
+    }
+    summary_.seconds = SecondsSince(start_);
+    return summary_;
+  }
+
+ private:
+  // Renders the pass frame by frame; noise, mask analysis and PNG encoding of each
+  // frame run beside the renderer (FinishFrame).
+  void GeneratePass(scenes::Pass pass) {
+    const int pass_index = scenes::PassIndex(pass);
+    const int frame_count = FramesOfPass(world_, pass, options_.max_frames_per_pass);
+    const fs::path pass_dir = staging_ ? staging_->path() / scenes::PassName(pass) : fs::path();
+    std::optional<TumSequenceWriter> writer;
+    if (staging_) {
+      writer.emplace(pass_dir, sequence_camera_);
+      fs::create_directories(pass_dir / "masks");
+    }
+    const InstanceTable instances = InstancesOfPass(world_, pass);
+
+    std::vector<FrameRecord> records(static_cast<size_t>(frame_count));
+    FrameJobQueue jobs(2 * threads_);
+    Eigen::Isometry3d T_wc_previous = scenes::CameraPoseAt(world_, pass, 0.0);
+    for (int i = 0; i < frame_count; ++i) {
+      if (options_.cancel && options_.cancel->load()) throw Error("generate: cancelled");
+      const double stamp_s = scenes::FrameStamp(world_, i);
+      const Eigen::Isometry3d T_wc = scenes::CameraPoseAt(world_, pass, stamp_s);
+      const auto render_start = Clock::now();
+      renderer_.SetScene(pass, stamp_s);
+      auto frame = std::make_shared<RenderedFrame>(renderer_.RenderFrom(T_wc));
+      summary_.render_seconds += SecondsSince(render_start);
+      records[i].stamp_s = stamp_s;
+      records[i].T_wc = T_wc;
+      if (writer) writer->AddEntry(stamp_s, T_wc);
+      FrameRecord* record = &records[i];
+      const TumSequenceWriter* frame_writer = writer ? &*writer : nullptr;
+      jobs.Push([=, &instances]() {
+        FinishFrame(pass_index, i, T_wc_previous, T_wc, frame_writer, pass_dir, instances, frame.get(), record);
+      });
+      T_wc_previous = T_wc;
+      ++summary_.frames;
+      if (progress_) progress_({pass_index, i + 1, frame_count, summary_.frames / SecondsSince(start_)});
+    }
+    jobs.WaitAll();
+    if (writer) {
+      writer->Finish();
+      WritePassMetadata(pass_dir, world_, scenario_, pass, instances, records);
+    }
+  }
+
+  // Sensor noise on a rendered frame, its mask analysed and checked against the pass's
+  // instances, then its images written (or, with no writer, only encoded, to measure).
+  void FinishFrame(int pass_index, int i, const Eigen::Isometry3d& T_wc_previous, const Eigen::Isometry3d& T_wc,
+                   const TumSequenceWriter* writer, const fs::path& pass_dir, const InstanceTable& instances,
+                   RenderedFrame* frame, FrameRecord* record) const {
+    const double stamp_s = record->stamp_s;
+    sensor_.Apply(scenario_.seed, pass_index, i, T_wc_previous, T_wc, frame);
+    record->instances = AnalyseMask(frame->instance_ids);
+    const std::string name = TumSequenceWriter::StampName(stamp_s);
+    CheckMaskIds(frame->instance_ids, instances, name);
+    if (writer != nullptr) {
+      WriteColorImage(writer->RgbPath(stamp_s), frame->color_bgr);
+      WriteDepthImage(writer->DepthPath(stamp_s), frame->depth_m, sequence_camera_.depth_factor);
+      WriteInstanceMask(pass_dir / "masks" / (name + ".png"), frame->instance_ids);
+    } else {
+      EncodeColorPng(frame->color_bgr);
+      EncodeDepthPng(frame->depth_m, sequence_camera_.depth_factor);
+      EncodeInstanceMaskPng(frame->instance_ids);
+    }
+  }
+
+  const scenes::Scenario& scenario_;
+  const GenerateOptions& options_;
+  const ProgressCallback& progress_;
+  const Clock::time_point start_ = Clock::now();
+  const scenes::World world_;
+  std::optional<StagingDirectory> staging_;
+  WorldRenderer renderer_;
+  const SensorModel sensor_;
+  const SequenceCamera sequence_camera_;
+  const int threads_;
+  GenerateSummary summary_;
+};
+
 }  // namespace
 
 bool GenerateOptions::IsValid(std::string* error) const {
@@ -282,98 +407,7 @@ GenerateSummary GenerateDataset(const scenes::Scenario& scenario, const fs::path
                                 const GenerateOptions& options, const ProgressCallback& progress) {
   std::string error;
   if (!options.IsValid(&error)) throw Error("generate: " + error);
-  const auto start = Clock::now();
-
-  const scenes::World world = scenes::BuildWorld(scenario);
-  std::optional<StagingDirectory> staging;
-  if (options.write_files) staging.emplace(out_dir, options.overwrite);
-
-  WorldRenderer renderer(world, options.backend, options.render);
-  const PinholeCamera camera = renderer.intrinsics();
-  const SensorModel sensor(scenario.sensor, camera, KindDefaultMaxDepth(world), world.camera.fps);
-  const SequenceCamera sequence_camera{camera, world.camera.depth_factor};
-  const int threads = options.encode_threads > 0
-                          ? options.encode_threads
-                          : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-
-  GenerateSummary summary;
-  summary.gl_renderer = renderer.gl_renderer();
-  for (scenes::Pass pass : scenes::kBothPasses) {
-    const int pass_index = scenes::PassIndex(pass);
-    const int frame_count = FramesOfPass(world, pass, options.max_frames_per_pass);
-    const fs::path pass_dir = options.write_files ? staging->path() / scenes::PassName(pass) : fs::path();
-    std::optional<TumSequenceWriter> writer;
-    if (options.write_files) {
-      writer.emplace(pass_dir, sequence_camera);
-      fs::create_directories(pass_dir / "masks");
-    }
-    const InstanceTable instances = InstancesOfPass(world, pass);
-
-    std::vector<FrameRecord> records(static_cast<size_t>(frame_count));
-    FrameJobQueue jobs(2 * threads);
-    Eigen::Isometry3d T_wc_previous = scenes::CameraPoseAt(world, pass, 0.0);
-    for (int i = 0; i < frame_count; ++i) {
-      if (options.cancel && options.cancel->load()) throw Error("generate: cancelled");
-      const double stamp_s = scenes::FrameStamp(world, i);
-      const Eigen::Isometry3d T_wc = scenes::CameraPoseAt(world, pass, stamp_s);
-      const auto render_start = Clock::now();
-      renderer.SetScene(pass, stamp_s);
-      auto frame = std::make_shared<RenderedFrame>(renderer.RenderFrom(T_wc));
-      summary.render_seconds += SecondsSince(render_start);
-      records[i].stamp_s = stamp_s;
-      records[i].T_wc = T_wc;
-      if (writer) writer->AddEntry(stamp_s, T_wc);
-
-      // Noise, mask analysis and PNG encoding run beside the renderer.
-      FrameRecord* record = &records[i];
-      const std::string name = TumSequenceWriter::StampName(stamp_s);
-      const bool write_files = options.write_files;
-      jobs.Push([=, &writer, &sensor, &instances, &scenario]() {
-        sensor.Apply(scenario.seed, pass_index, i, T_wc_previous, T_wc, frame.get());
-        record->instances = AnalyseMask(frame->instance_ids);
-        CheckMaskIds(frame->instance_ids, instances, name);
-        if (write_files) {
-          WriteColorImage(writer->RgbPath(stamp_s), frame->color_bgr);
-          WriteDepthImage(writer->DepthPath(stamp_s), frame->depth_m,
-                          sequence_camera.depth_factor);
-          WriteInstanceMask(pass_dir / "masks" / (name + ".png"), frame->instance_ids);
-        } else {
-          EncodeColorPng(frame->color_bgr);
-          EncodeDepthPng(frame->depth_m, sequence_camera.depth_factor);
-          EncodeInstanceMaskPng(frame->instance_ids);
-        }
-      });
-      T_wc_previous = T_wc;
-      ++summary.frames;
-      if (progress) {
-        progress({pass_index, i + 1, frame_count, summary.frames / SecondsSince(start)});
-      }
-    }
-    jobs.WaitAll();
-
-    if (options.write_files) {
-      writer->Finish();
-      instances.Write(pass_dir / "instances.json");
-      WriteFileAtomically(pass_dir / "annotations_coco.json",
-                          CocoAnnotations(world, instances, records).dump() + "\n");
-      WriteTracks(pass_dir / "tracks.json", ObjectTracks(world, pass, records));
-      WriteFileAtomically(pass_dir / "scenario.yaml", scenario.text);
-      WriteManifest(pass_dir, {{"scenario", scenario.name},
-                               {"seed", scenario.seed},
-                               {"pass", scenes::PassName(pass)},
-                               {"frames", frame_count}});
-    }
-  }
-  if (options.write_files) {
-    WriteFileAtomically(staging->path() / "scenario.yaml", scenario.text);
-    WriteManifest(staging->path(), {{"scenario", scenario.name},
-                                    {"seed", scenario.seed},
-                                    {"kind", world.kind},
-                                    {"generator", "segslam generate"}});
-    staging->Commit();
-  }
-  summary.seconds = SecondsSince(start);
-  return summary;
+  return DatasetGeneration(scenario, out_dir, options, progress).Run();
 }
 
 RenderOnlySummary RenderOnly(const scenes::Scenario& scenario, GlBackend backend,
