@@ -88,6 +88,10 @@ struct WorldRenderer::Impl {
   }
 
   void UploadTextures();
+  void IndexBodies();
+  void MakeRenderContext(GlBackend backend);
+  void SetRenderOptions();
+  void ComputeFrustum();
   void PrepareScene(const Eigen::Isometry3d& T_wc);
   bool OutsideView(const mjvGeom& geom, const Eigen::Isometry3d& T_cw) const;
   void ReadDepth(RenderedFrame* frame);
@@ -227,6 +231,90 @@ void WorldRenderer::Impl::ReadDepth(RenderedFrame* frame) {
   frame->depth_m = out;
 }
 
+// Mocap indices of the camera and of every object part, and which object (and instance)
+// each model geom belongs to.
+void WorldRenderer::Impl::IndexBodies() {
+  const mjModel* m = model.get();
+  const int camera_body = mj_name2id(m, mjOBJ_BODY, mjcf.camera_body.c_str());
+  camera_mocap = camera_body >= 0 ? m->body_mocapid[camera_body] : -1;
+  if (camera_mocap < 0) throw Error("MuJoCo: the camera body is not a mocap body");
+  geom_instance.assign(m->ngeom, 0);
+  geom_object.assign(m->ngeom, -1);
+  std::vector<int> body_object(m->nbody, -1);
+  part_mocap.resize(world.objects.size());
+  for (size_t k = 0; k < world.objects.size(); ++k) {
+    for (const std::string& name : mjcf.part_bodies[k]) {
+      const int body = mj_name2id(m, mjOBJ_BODY, name.c_str());
+      if (body < 0 || m->body_mocapid[body] < 0) {
+        throw Error("MuJoCo: part body '" + name + "' missing or not mocap");
+      }
+      part_mocap[k].push_back(m->body_mocapid[body]);
+      body_object[body] = static_cast<int>(k);
+    }
+  }
+  for (int g = 0; g < m->ngeom; ++g) {
+    const int object = body_object[m->geom_bodyid[g]];
+    geom_object[g] = object;
+    if (object >= 0) geom_instance[g] = world.objects[object].instance_id;
+  }
+  object_hidden.assign(world.objects.size(), 1);
+}
+
+// The GL context, then MuJoCo's render context drawing into its off-screen buffer.
+void WorldRenderer::Impl::MakeRenderContext(GlBackend backend) {
+  const mjModel* m = model.get();
+  gl = std::make_unique<GlContext>(backend, width, height);
+  mjv_defaultScene(&scene);
+  mjv_makeScene(m, &scene, m->ngeom + 16);
+  scene_made = true;
+  mjr_defaultContext(&context);
+  mjr_makeContext(m, &context, mjFONTSCALE_50);
+  context_made = true;
+  mjr_setBuffer(mjFB_OFFSCREEN, &context);
+  if (context.currentBuffer != mjFB_OFFSCREEN) {
+    throw Error("MuJoCo: the off-screen framebuffer is not available");
+  }
+  if (context.offWidth < width || context.offHeight < height) {
+    throw Error("MuJoCo: off-screen buffer smaller than the camera image");
+  }
+}
+
+// No decorations: only geoms of static and dynamic bodies, no frames, labels, light or
+// camera markers; no reflections, skybox, fog or (unless asked) shadows. The view is the
+// model's camera.
+void WorldRenderer::Impl::SetRenderOptions() {
+  mjv_defaultOption(&vis_option);
+  for (int i = 0; i < mjNVISFLAG; ++i) vis_option.flags[i] = 0;
+  vis_option.flags[mjVIS_STATIC] = 1;
+  vis_option.flags[mjVIS_TEXTURE] = 1;
+  vis_option.frame = mjFRAME_NONE;
+  vis_option.label = mjLABEL_NONE;
+  for (int i = 0; i < mjNGROUP; ++i) vis_option.geomgroup[i] = 1;
+  scene.flags[mjRND_SHADOW] = options.shadows ? 1 : 0;
+  scene.flags[mjRND_WIREFRAME] = 0;
+  scene.flags[mjRND_REFLECTION] = 0;
+  scene.flags[mjRND_ADDITIVE] = 0;
+  scene.flags[mjRND_SKYBOX] = 0;
+  scene.flags[mjRND_FOG] = 0;
+  scene.flags[mjRND_HAZE] = 0;
+  scene.flags[mjRND_SEGMENT] = 0;
+  scene.flags[mjRND_IDCOLOR] = 0;
+  scene.flags[mjRND_CULL_FACE] = 1;  // closed geoms: back faces are never seen
+  mjv_defaultCamera(&camera);
+  camera.type = mjCAMERA_FIXED;
+  camera.fixedcamid = mj_name2id(model.get(), mjOBJ_CAMERA, mjcf.camera.c_str());
+}
+
+// Frustum side planes of the optical frame, a little wider than the image so that
+// rounding never drops a geom that touches the border.
+void WorldRenderer::Impl::ComputeFrustum() {
+  const PinholeCamera intrinsics = PinholeCamera::FromVerticalFov(width, height, world.camera.fovy_deg);
+  const double tan_x = 1.02 * 0.5 * width / intrinsics.fx;
+  const double tan_y = 1.02 * 0.5 * height / intrinsics.fy;
+  frustum_side_normals = {Eigen::Vector3d(1, 0, -tan_x).normalized(), Eigen::Vector3d(-1, 0, -tan_x).normalized(),
+                          Eigen::Vector3d(0, 1, -tan_y).normalized(), Eigen::Vector3d(0, -1, -tan_y).normalized()};
+}
+
 WorldRenderer::WorldRenderer(const scenes::World& world, GlBackend backend,
                              RenderOptions options)
     : impl_(std::make_unique<Impl>()) {
@@ -241,88 +329,14 @@ WorldRenderer::WorldRenderer(const scenes::World& world, GlBackend backend,
   s.height = world.camera.height;
 
   s.model.reset(CompileMjcf(s.mjcf.xml));
-  mjModel* m = s.model.get();
-  s.data.reset(mj_makeData(m));
-  s.near_m = m->vis.map.znear * m->stat.extent;
-  s.far_m = m->vis.map.zfar * m->stat.extent;
+  s.data.reset(mj_makeData(s.model.get()));
+  s.near_m = s.model->vis.map.znear * s.model->stat.extent;
+  s.far_m = s.model->vis.map.zfar * s.model->stat.extent;
   s.UploadTextures();
-
-  // Mocap indices of the camera and of every part; geom -> instance table.
-  const int camera_body = mj_name2id(m, mjOBJ_BODY, s.mjcf.camera_body.c_str());
-  s.camera_mocap = camera_body >= 0 ? m->body_mocapid[camera_body] : -1;
-  if (s.camera_mocap < 0) throw Error("MuJoCo: the camera body is not a mocap body");
-  s.geom_instance.assign(m->ngeom, 0);
-  s.geom_object.assign(m->ngeom, -1);
-  std::vector<int> body_object(m->nbody, -1);
-  s.part_mocap.resize(world.objects.size());
-  for (size_t k = 0; k < world.objects.size(); ++k) {
-    for (const std::string& name : s.mjcf.part_bodies[k]) {
-      const int body = mj_name2id(m, mjOBJ_BODY, name.c_str());
-      if (body < 0 || m->body_mocapid[body] < 0) {
-        throw Error("MuJoCo: part body '" + name + "' missing or not mocap");
-      }
-      s.part_mocap[k].push_back(m->body_mocapid[body]);
-      body_object[body] = static_cast<int>(k);
-    }
-  }
-  for (int g = 0; g < m->ngeom; ++g) {
-    const int object = body_object[m->geom_bodyid[g]];
-    s.geom_object[g] = object;
-    if (object >= 0) s.geom_instance[g] = world.objects[object].instance_id;
-  }
-  s.object_hidden.assign(world.objects.size(), 1);
-
-  // GL context, then MuJoCo's render context drawing into its off-screen buffer.
-  s.gl = std::make_unique<GlContext>(backend, s.width, s.height);
-  mjv_defaultScene(&s.scene);
-  mjv_makeScene(m, &s.scene, m->ngeom + 16);
-  s.scene_made = true;
-  mjr_defaultContext(&s.context);
-  mjr_makeContext(m, &s.context, mjFONTSCALE_50);
-  s.context_made = true;
-  mjr_setBuffer(mjFB_OFFSCREEN, &s.context);
-  if (s.context.currentBuffer != mjFB_OFFSCREEN) {
-    throw Error("MuJoCo: the off-screen framebuffer is not available");
-  }
-  if (s.context.offWidth < s.width || s.context.offHeight < s.height) {
-    throw Error("MuJoCo: off-screen buffer smaller than the camera image");
-  }
-
-  // No decorations: only geoms of static and dynamic bodies, no frames, labels, light or
-  // camera markers; no reflections, skybox, fog or (unless asked) shadows.
-  mjv_defaultOption(&s.vis_option);
-  for (int i = 0; i < mjNVISFLAG; ++i) s.vis_option.flags[i] = 0;
-  s.vis_option.flags[mjVIS_STATIC] = 1;
-  s.vis_option.flags[mjVIS_TEXTURE] = 1;
-  s.vis_option.frame = mjFRAME_NONE;
-  s.vis_option.label = mjLABEL_NONE;
-  for (int i = 0; i < mjNGROUP; ++i) s.vis_option.geomgroup[i] = 1;
-  s.scene.flags[mjRND_SHADOW] = options.shadows ? 1 : 0;
-  s.scene.flags[mjRND_WIREFRAME] = 0;
-  s.scene.flags[mjRND_REFLECTION] = 0;
-  s.scene.flags[mjRND_ADDITIVE] = 0;
-  s.scene.flags[mjRND_SKYBOX] = 0;
-  s.scene.flags[mjRND_FOG] = 0;
-  s.scene.flags[mjRND_HAZE] = 0;
-  s.scene.flags[mjRND_SEGMENT] = 0;
-  s.scene.flags[mjRND_IDCOLOR] = 0;
-  s.scene.flags[mjRND_CULL_FACE] = 1;  // closed geoms: back faces are never seen
-  mjv_defaultCamera(&s.camera);
-  s.camera.type = mjCAMERA_FIXED;
-  s.camera.fixedcamid = mj_name2id(m, mjOBJ_CAMERA, s.mjcf.camera.c_str());
-
-  {
-    // Frustum side planes of the optical frame, a little wider than the image so that
-    // rounding never drops a geom that touches the border.
-    const PinholeCamera intrinsics = PinholeCamera::FromVerticalFov(
-        s.width, s.height, s.world.camera.fovy_deg);
-    const double tan_x = 1.02 * 0.5 * s.width / intrinsics.fx;
-    const double tan_y = 1.02 * 0.5 * s.height / intrinsics.fy;
-    s.frustum_side_normals = {Eigen::Vector3d(1, 0, -tan_x).normalized(),
-                              Eigen::Vector3d(-1, 0, -tan_x).normalized(),
-                              Eigen::Vector3d(0, 1, -tan_y).normalized(),
-                              Eigen::Vector3d(0, -1, -tan_y).normalized()};
-  }
+  s.IndexBodies();
+  s.MakeRenderContext(backend);
+  s.SetRenderOptions();
+  s.ComputeFrustum();
   s.rgb.resize(static_cast<size_t>(s.width) * s.height * 3);
   s.depth.resize(static_cast<size_t>(s.width) * s.height);
 }
