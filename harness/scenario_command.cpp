@@ -91,104 +91,133 @@ std::string RunLine(const ScenarioRunRequest& args, int done_runs, int total_run
   return fmt::format("{}  ({:.1f} s)", line, run.seconds);
 }
 
-// Runs each of `runs` on the dataset (segslam run, then eval), args.jobs at a time, and
-// fills in its seconds and evaluation. A run is deterministic and uses one thread (plus
-// OpenCV's), so the results do not depend on how many run at once or in which order they
-// end. One job shows a progress bar per pass; several share one bar over all frames. The
-// first error stops the other runs and is rethrown.
-void RunRepeats(std::vector<RepeatRun>* runs, const BenchSettings& bench, const fs::path& dataset,
-                const fs::path& report_dir, const ScenarioRunRequest& args, const std::atomic<bool>* cancel) {
-  const int total_runs = static_cast<int>(runs->size());
-  const int jobs = std::clamp(args.jobs, 1, std::max(1, total_runs));
-  std::mutex output;  // guards printing, the shared bar and the counters below
-  int done_runs = 0;
-  std::atomic<bool> stop{false};
-  std::exception_ptr first_error;
-
-  // The shared bar counts frames over all runs: every run reads the same passes.
-  int frames_per_run = 0;
-  for (const char* pass : {"pass1", "pass2"}) {
-    const int frames = static_cast<int>(TumSequence::Open(dataset / pass).size());
-    frames_per_run += args.frames > 0 ? std::min(frames, args.frames) : frames;
+// Runs each of a scenario's runs on the dataset (segslam run, then eval), args.jobs at a
+// time, and fills in its seconds and evaluation. A run is deterministic and uses one
+// thread (plus OpenCV's), so the results do not depend on how many run at once or in
+// which order they end. One job shows a progress bar per pass; several share one bar
+// over all frames. The first error stops the other runs and is rethrown.
+class RepeatRunner {
+ public:
+  RepeatRunner(std::vector<RepeatRun>* runs, const BenchSettings& bench, const fs::path& dataset,
+               const fs::path& report_dir, const ScenarioRunRequest& args, const std::atomic<bool>* cancel)
+      : runs_(*runs),
+        bench_(bench),
+        dataset_(dataset),
+        report_dir_(report_dir),
+        args_(args),
+        cancel_(cancel),
+        total_runs_(static_cast<int>(runs->size())),
+        jobs_(std::clamp(args.jobs, 1, std::max(1, total_runs_))),
+        frames_done_(runs->size(), 0) {
+    // The shared bar counts frames over all runs: every run reads the same passes.
+    for (const char* pass : {"pass1", "pass2"}) {
+      const int frames = static_cast<int>(TumSequence::Open(dataset / pass).size());
+      frames_per_run_ += args.frames > 0 ? std::min(frames, args.frames) : frames;
+    }
+    if (jobs_ > 1 && !args.quiet) {
+      shared_bar_.emplace(fmt::format("{}{} runs, {} at a time", args.progress_prefix, total_runs_, jobs_));
+    }
   }
-  std::vector<int> frames_done(runs->size(), 0);
-  std::optional<ProgressBar> shared_bar;
-  if (jobs > 1 && !args.quiet) {
-    shared_bar.emplace(fmt::format("{}{} runs, {} at a time", args.progress_prefix, total_runs, jobs));
-  }
-  const auto start = std::chrono::steady_clock::now();
-  auto last_draw = start;
 
-  auto run_one = [&](std::size_t index) {
-    RepeatRun& run = (*runs)[index];
-    const bool deterministic = bench.ModeIsDeterministic(run.mode);
+  void RunAll() {
+    std::vector<std::thread> threads;
+    for (int j = 1; j < jobs_; ++j) threads.emplace_back([this] { Work(); });
+    Work();
+    for (std::thread& thread : threads) thread.join();
+    if (shared_bar_.has_value()) shared_bar_->Finish();
+    if (first_error_) std::rethrow_exception(first_error_);
+  }
+
+ private:
+  // Takes the next run until none is left or a run has failed.
+  void Work() {
+    for (std::size_t index; !stop_.load() && (index = next_.fetch_add(1)) < runs_.size();) {
+      try {
+        RunOne(index);
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(output_);
+        if (!first_error_) first_error_ = std::current_exception();
+        stop_ = true;
+      }
+    }
+  }
+
+  void RunOne(std::size_t index) {
+    RepeatRun& run = runs_[index];
     DatasetRunOptions options;
     options.mode = run.mode;
-    if (run.mode != "plain" && bench.segmenter != "gt") options.segmenter = bench.segmenter;
+    if (run.mode != "plain" && bench_.segmenter != "gt") options.segmenter = bench_.segmenter;
     options.seed = run.seed;
-    options.strength = bench.segmenter_strength;
-    std::optional<ProgressBar> bar;
+    options.strength = bench_.segmenter_strength;
+    std::optional<ProgressBar> bar;  // this run's, with one job
     std::string bar_pass;
     int pass1_frames = 0;
     // Each pass's rate counts from the end of the previous pass (or the run's start).
     auto pass_start = std::chrono::steady_clock::now();
     options.on_frame = [&](const std::string& pass, int done, int total) {
-      if (cancel->load()) throw Error("scenario run: cancelled");
-      if (stop.load()) throw Error("scenario run: stopped after another run's error");
-      if (args.quiet) return;
+      if (cancel_->load()) throw Error("scenario run: cancelled");
+      if (stop_.load()) throw Error("scenario run: stopped after another run's error");
+      if (args_.quiet) return;
       const auto now = std::chrono::steady_clock::now();
-      if (jobs > 1) {
+      if (jobs_ > 1) {
         if (pass == "pass1") pass1_frames = total;
-        std::lock_guard<std::mutex> lock(output);
-        frames_done[index] = (pass == "pass1" ? 0 : pass1_frames) + done;
-        if (now - last_draw < std::chrono::milliseconds(200) && done != total) return;
-        last_draw = now;
-        int all_done = 0;
-        for (int frames : frames_done) all_done += frames;
-        const double seconds = std::max(std::chrono::duration<double>(now - start).count(), 1e-9);
-        shared_bar->Update(all_done, frames_per_run * total_runs, all_done / seconds,
-                           fmt::format("{} of {} runs done", done_runs, total_runs));
+        UpdateSharedBar(index, (pass == "pass1" ? 0 : pass1_frames) + done, done == total, now);
         return;
       }
       if (!bar.has_value() || bar_pass != pass) {
         if (bar.has_value()) bar->Finish();
-        bar.emplace(fmt::format("{}[{}/{}] {} {}", args.progress_prefix, index + 1, total_runs, run.mode, pass));
+        bar.emplace(fmt::format("{}[{}/{}] {} {}", args_.progress_prefix, index + 1, total_runs_, run.mode, pass));
         bar_pass = pass;
       }
       bar->Update(done, total, done / std::max(std::chrono::duration<double>(now - pass_start).count(), 1e-9));
       if (done == total) pass_start = now;
     };
     const auto run_start = std::chrono::steady_clock::now();
-    RunDataset(dataset, report_dir / run.run_dir, options);
+    RunDataset(dataset_, report_dir_ / run.run_dir, options);
     if (bar.has_value()) bar->Finish();
     run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - run_start).count();
-    run.evaluation = EvaluateRun(report_dir / run.run_dir, dataset);
-    std::lock_guard<std::mutex> lock(output);
-    ++done_runs;
-    if (shared_bar.has_value()) shared_bar->Finish();
-    fmt::print("{}\n", RunLine(args, done_runs, total_runs, run, deterministic));
+    run.evaluation = EvaluateRun(report_dir_ / run.run_dir, dataset_);
+    std::lock_guard<std::mutex> lock(output_);
+    ++done_runs_;
+    if (shared_bar_.has_value()) shared_bar_->Finish();
+    fmt::print("{}\n", RunLine(args_, done_runs_, total_runs_, run, bench_.ModeIsDeterministic(run.mode)));
     std::fflush(stdout);  // a CI log shows each run as it ends
-  };
+  }
 
-  std::atomic<std::size_t> next{0};
-  auto worker = [&] {
-    for (std::size_t index; !stop.load() && (index = next.fetch_add(1)) < runs->size();) {
-      try {
-        run_one(index);
-      } catch (...) {
-        std::lock_guard<std::mutex> lock(output);
-        if (!first_error) first_error = std::current_exception();
-        stop = true;
-      }
-    }
-  };
-  std::vector<std::thread> threads;
-  for (int j = 1; j < jobs; ++j) threads.emplace_back(worker);
-  worker();
-  for (std::thread& thread : threads) thread.join();
-  if (shared_bar.has_value()) shared_bar->Finish();
-  if (first_error) std::rethrow_exception(first_error);
-}
+  // Run `index` has read `frames` frames of both passes; redrawn at most every 0.2 s
+  // and at the end of a pass.
+  void UpdateSharedBar(std::size_t index, int frames, bool pass_done, std::chrono::steady_clock::time_point now) {
+    std::lock_guard<std::mutex> lock(output_);
+    frames_done_[index] = frames;
+    if (now - last_draw_ < std::chrono::milliseconds(200) && !pass_done) return;
+    last_draw_ = now;
+    int all_done = 0;
+    for (int done : frames_done_) all_done += done;
+    const double seconds = std::max(std::chrono::duration<double>(now - start_).count(), 1e-9);
+    shared_bar_->Update(all_done, frames_per_run_ * total_runs_, all_done / seconds,
+                        fmt::format("{} of {} runs done", done_runs_, total_runs_));
+  }
+
+  std::vector<RepeatRun>& runs_;
+  const BenchSettings& bench_;
+  const fs::path& dataset_;
+  const fs::path& report_dir_;
+  const ScenarioRunRequest& args_;
+  const std::atomic<bool>* cancel_;
+  const int total_runs_;
+  const int jobs_;
+  const std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+  std::atomic<std::size_t> next_{0};
+  std::atomic<bool> stop_{false};
+
+  std::mutex output_;  // guards printing, the shared bar and everything below
+  int frames_per_run_ = 0;
+  std::vector<int> frames_done_;  // per run, both passes
+  std::optional<ProgressBar> shared_bar_;
+  std::chrono::steady_clock::time_point last_draw_ = start_;
+  int done_runs_ = 0;
+  std::exception_ptr first_error_;
+};
 
 std::string EffectiveYaml(const scenes::Scenario& scenario) {
   YAML::Emitter yaml;
@@ -329,7 +358,7 @@ ScenarioReport RunScenarioToReport(const ScenarioRunRequest& args) {
   fs::create_directories(report_dir / "runs");
   std::vector<RepeatRun> runs = PlanRuns(bench);
   std::fflush(stdout);
-  RunRepeats(&runs, bench, dataset, report_dir, args, cancel);
+  RepeatRunner(&runs, bench, dataset, report_dir, args, cancel).RunAll();
   report.runs = std::move(runs);
 
   report.scenario_name = scenario.name;
