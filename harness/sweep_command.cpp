@@ -51,26 +51,22 @@ bool PointIsDone(const fs::path& point_dir, const std::vector<std::string>& over
   }
 }
 
-int RunSweep(const SweepArgs& args) {
-  const auto start = std::chrono::steady_clock::now();
-  // A sweep file brings its scenario and grid; --set lays over them.
-  std::optional<SweepFile> sweep_file_spec;
-  if (SweepFile::Recognize(args.file)) sweep_file_spec = SweepFile::Load(args.file);
-  ScenarioRunRequest run = args.run;
-  run.scenario_file = sweep_file_spec ? sweep_file_spec->scenario.string() : args.file;
-  const SweepGrid grid = sweep_file_spec ? sweep_file_spec->grid.WithSetOptions(args.set_options)
-                                         : SweepGrid::FromSetOptions(args.set_options);
-  const Shard shard = Shard::Parse(args.shard);
-  // The scenario and every point's overrides (bench settings included) are checked
-  // before the first run.
-  const scenes::Scenario base = scenes::LoadScenario(run.scenario_file);
-  const int points = grid.PointCount();
-  for (int p = 0; p < points; ++p) {
+// The overrides of grid point p: the grid's fixed ones, then the point's own.
+std::vector<std::string> PointOverrides(const SweepGrid& grid, int p) {
+  std::vector<std::string> overrides = grid.fixed_overrides;
+  for (const std::string& assignment : grid.PointAssignments(p)) overrides.push_back(assignment);
+  return overrides;
+}
+
+// Applies every point's overrides (bench settings included) to the scenario, so that a
+// bad point fails before the first run. Errors name the sweep file's point when there
+// is one.
+void CheckEveryPoint(const scenes::Scenario& base, const SweepGrid& grid, const ScenarioRunRequest& run,
+                     const std::string& sweep_file) {
+  for (int p = 0; p < grid.PointCount(); ++p) {
     scenes::Scenario scenario = base;
-    std::vector<std::string> overrides = grid.fixed_overrides;
-    for (const std::string& assignment : grid.PointAssignments(p)) overrides.push_back(assignment);
     try {
-      scenes::ApplyOverrides(scenario, overrides);
+      scenes::ApplyOverrides(scenario, PointOverrides(grid, p));
       const BenchSettings bench = EffectiveBench(scenario, run);
       for (const SweepAxis& axis : grid.axes) {
         if (axis.key == "bench.segmenter_strength" && bench.segmenter == "gt") {
@@ -78,18 +74,17 @@ int RunSweep(const SweepArgs& args) {
         }
       }
     } catch (const Error& e) {
-      if (!sweep_file_spec) throw;
-      throw Error(args.file + ": point " + grid.PointName(p) + ": " + e.what());
+      if (sweep_file.empty()) throw;
+      throw Error(sweep_file + ": point " + grid.PointName(p) + ": " + e.what());
     }
   }
-  const std::string default_name = sweep_file_spec ? sweep_file_spec->name : base.name + "-sweep";
-  const fs::path out_dir = args.out_dir.empty() ? fs::path("reports") / default_name : fs::path(args.out_dir);
+}
+
+// Writes out_dir/sweep.json, which names the sweep's scenario and grid. A folder that
+// holds another sweep (another grid, or an unreadable sweep.json) is refused, so shards
+// and reruns of one sweep share a folder and different sweeps never mix.
+void ClaimSweepFolder(const fs::path& out_dir, const nlohmann::json& sweep) {
   fs::create_directories(out_dir);
-  nlohmann::json sweep = {{"scenario_file", run.scenario_file}, {"grid", grid.ToJson()}};
-  if (sweep_file_spec) {
-    sweep["sweep_file"] = args.file;
-    sweep["name"] = sweep_file_spec->name;
-  }
   const fs::path sweep_file = out_dir / "sweep.json";
   if (fs::exists(sweep_file)) {
     nlohmann::json existing;
@@ -103,34 +98,62 @@ int RunSweep(const SweepArgs& args) {
     }
   }
   WriteFileAtomically(sweep_file, sweep.dump(2) + "\n");
+}
 
+// Runs grid point p as a scenario run into out_dir/points/<point name>, unless an
+// earlier sweep left its results there; `ordinal` of `mine` counts this shard's points.
+void RunPoint(const ScenarioRunRequest& run, const SweepGrid& grid, int p, const fs::path& out_dir, int ordinal,
+              int mine) {
+  ScenarioRunRequest request = run;
+  request.overrides = PointOverrides(grid, p);
+  request.out_dir = (out_dir / "points" / grid.PointName(p)).string();
+  request.progress_prefix = fmt::format("[point {}/{}] ", ordinal, mine);
+  request.junit_file.clear();
+  if (PointIsDone(request.out_dir, request.overrides)) {
+    fmt::print("[point {}/{}] {}: done before, kept\n", ordinal, mine, grid.PointName(p));
+    return;
+  }
+  fmt::print("[point {}/{}] {}\n", ordinal, mine, grid.PointName(p));
+  std::fflush(stdout);
+  const ScenarioReport report = RunScenarioToReport(request);
+  int passed = 0;
+  for (const ExpectationResult& check : report.checks) passed += check.passed ? 1 : 0;
+  fmt::print("[point {}/{}] {}: {} runs in {:.1f} s, {} of {} expectations passed\n", ordinal, mine,
+             grid.PointName(p), report.runs.size(), report.seconds, passed, report.checks.size());
+  std::fflush(stdout);
+}
+
+int RunSweep(const SweepArgs& args) {
+  const auto start = std::chrono::steady_clock::now();
+  // A sweep file brings its scenario and grid; --set lays over them.
+  std::optional<SweepFile> sweep_file_spec;
+  if (SweepFile::Recognize(args.file)) sweep_file_spec = SweepFile::Load(args.file);
+  ScenarioRunRequest run = args.run;
+  run.scenario_file = sweep_file_spec ? sweep_file_spec->scenario.string() : args.file;
+  const SweepGrid grid = sweep_file_spec ? sweep_file_spec->grid.WithSetOptions(args.set_options)
+                                         : SweepGrid::FromSetOptions(args.set_options);
+  const Shard shard = Shard::Parse(args.shard);
+  const scenes::Scenario base = scenes::LoadScenario(run.scenario_file);
+  CheckEveryPoint(base, grid, run, sweep_file_spec ? args.file : std::string());
+
+  const std::string default_name = sweep_file_spec ? sweep_file_spec->name : base.name + "-sweep";
+  const fs::path out_dir = args.out_dir.empty() ? fs::path("reports") / default_name : fs::path(args.out_dir);
+  nlohmann::json sweep = {{"scenario_file", run.scenario_file}, {"grid", grid.ToJson()}};
+  if (sweep_file_spec) {
+    sweep["sweep_file"] = args.file;
+    sweep["name"] = sweep_file_spec->name;
+  }
+  ClaimSweepFolder(out_dir, sweep);
+
+  const int points = grid.PointCount();
   int mine = 0;
   for (int p = 0; p < points; ++p) mine += shard.Owns(p) ? 1 : 0;
   fmt::print("segslam sweep: {} points ({}), shard {}/{} runs {} of them, into {}\n", points,
              grid.axes.empty() ? std::string("no axis") : fmt::format("{} axes", grid.axes.size()), shard.index,
              shard.count, mine, out_dir.string());
-  int done = 0;
+  int ordinal = 0;
   for (int p = 0; p < points; ++p) {
-    if (!shard.Owns(p)) continue;
-    ++done;
-    ScenarioRunRequest request = run;
-    request.overrides = grid.fixed_overrides;
-    for (const std::string& assignment : grid.PointAssignments(p)) request.overrides.push_back(assignment);
-    request.out_dir = (out_dir / "points" / grid.PointName(p)).string();
-    request.progress_prefix = fmt::format("[point {}/{}] ", done, mine);
-    request.junit_file.clear();
-    if (PointIsDone(request.out_dir, request.overrides)) {
-      fmt::print("[point {}/{}] {}: done before, kept\n", done, mine, grid.PointName(p));
-      continue;
-    }
-    fmt::print("[point {}/{}] {}\n", done, mine, grid.PointName(p));
-    std::fflush(stdout);
-    const ScenarioReport report = RunScenarioToReport(request);
-    int passed = 0;
-    for (const ExpectationResult& check : report.checks) passed += check.passed ? 1 : 0;
-    fmt::print("[point {}/{}] {}: {} runs in {:.1f} s, {} of {} expectations passed\n", done, mine,
-               grid.PointName(p), report.runs.size(), report.seconds, passed, report.checks.size());
-    std::fflush(stdout);
+    if (shard.Owns(p)) RunPoint(run, grid, p, out_dir, ++ordinal, mine);
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (shard.count > 1) {
