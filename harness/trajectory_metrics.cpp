@@ -244,21 +244,17 @@ std::vector<double> PositionErrorPerFrame(const std::vector<StampedPose>& ground
   return errors;
 }
 
-RpeResult ComputeRpe(const std::vector<StampedPose>& ground_truth,
-                     const std::vector<StampedPose>& estimate, const RpeOptions& options) {
-  if (!(options.delta > 0) || !std::isfinite(options.delta)) {
-    throw Error(fmt::format("the RPE delta must be positive, got {}", options.delta));
-  }
-  const std::vector<double> gt_stamps = StampsOf(ground_truth, "ground-truth");
-  const std::vector<double> est_stamps = StampsOf(estimate, "estimate");
+namespace {
+
+// Throws unless each trajectory has 2 poses and they overlap in time by the script's
+// test: map each estimate stamp to its closest ground-truth stamp and back; if all land
+// on one estimate stamp, they do not overlap.
+void CheckRpeOverlap(const std::vector<double>& gt_stamps, const std::vector<double>& est_stamps) {
   if (gt_stamps.size() < 2 || est_stamps.size() < 2) {
     throw Error(fmt::format("RPE needs at least 2 poses in each trajectory (ground truth: {}; "
                             "estimate: {})",
                             StampRange(gt_stamps), StampRange(est_stamps)));
   }
-
-  // The script's overlap test: map each estimate stamp to its closest ground-truth stamp
-  // and back; if all land on one estimate stamp, the trajectories do not overlap in time.
   std::set<std::size_t> estimate_stamps_reached;
   for (double stamp : est_stamps) {
     const double closest_gt = gt_stamps[FindClosestIndex(gt_stamps, stamp)];
@@ -269,7 +265,13 @@ RpeResult ComputeRpe(const std::vector<StampedPose>& ground_truth,
                             "(ground truth: {}; estimate: {})",
                             StampRange(gt_stamps), StampRange(est_stamps)));
   }
+}
 
+// Index pairs (i, j) of estimate poses delta apart (seconds or frames): j is the pose
+// closest to delta after i. A partner that is the last pose is dropped, as the script
+// does: it is also where the search ends up when nothing lies delta ahead.
+std::vector<std::pair<std::size_t, std::size_t>> EstimatePairsDeltaApart(const std::vector<double>& est_stamps,
+                                                                         const RpeOptions& options) {
   std::vector<double> index_est;
   if (options.unit == RpeDeltaUnit::kSeconds) {
     index_est = est_stamps;
@@ -277,14 +279,27 @@ RpeResult ComputeRpe(const std::vector<StampedPose>& ground_truth,
     index_est.resize(est_stamps.size());
     std::iota(index_est.begin(), index_est.end(), 0.0);
   }
-  // A partner that is the last pose is dropped, as the script does: it is also where the
-  // search ends up when nothing lies delta ahead.
   std::vector<std::pair<std::size_t, std::size_t>> pairs;
   for (std::size_t i = 0; i < index_est.size(); ++i) {
     const std::size_t j = FindClosestIndex(index_est, index_est[i] + options.delta);
     if (j != index_est.size() - 1) pairs.emplace_back(i, j);
   }
+  return pairs;
+}
 
+}  // namespace
+
+RpeResult ComputeRpe(const std::vector<StampedPose>& ground_truth,
+                     const std::vector<StampedPose>& estimate, const RpeOptions& options) {
+  if (!(options.delta > 0) || !std::isfinite(options.delta)) {
+    throw Error(fmt::format("the RPE delta must be positive, got {}", options.delta));
+  }
+  const std::vector<double> gt_stamps = StampsOf(ground_truth, "ground-truth");
+  const std::vector<double> est_stamps = StampsOf(estimate, "estimate");
+  CheckRpeOverlap(gt_stamps, est_stamps);
+  const std::vector<std::pair<std::size_t, std::size_t>> pairs = EstimatePairsDeltaApart(est_stamps, options);
+
+  // Both ends of a pair need a ground-truth pose within twice the median interval.
   std::vector<double> gt_intervals;
   for (std::size_t k = 1; k < gt_stamps.size(); ++k) {
     gt_intervals.push_back(gt_stamps[k] - gt_stamps[k - 1]);
