@@ -35,6 +35,31 @@ std::uint16_t DominantGroundTruthId(const cv::Mat& region, const cv::Mat& gt_ids
   return best;
 }
 
+// The ground-truth tracks by instance id.
+using TrackIndex = std::map<std::uint16_t, const ObjectTrack*>;
+
+// The motion from frame i-1 to frame i of each previous region whose ground-truth object
+// moves, as the refiner projects it: T_cur_prev = T_cw(t) T_wo(t) T_ow(t-1) T_wc(t-1),
+// with every pose the true one. A region is the object it overlaps most in previous_gt.
+std::map<std::uint16_t, Eigen::Isometry3d> GroundTruthRegionMotions(const FrameSegmentation& previous_refined,
+                                                                    const cv::Mat& previous_gt,
+                                                                    const TrackIndex& track_of, size_t i,
+                                                                    const Eigen::Isometry3d& T_wc_previous,
+                                                                    const Eigen::Isometry3d& T_wc_current) {
+  std::map<std::uint16_t, Eigen::Isometry3d> motions;
+  for (const auto& region : previous_refined.instances) {
+    const std::uint16_t gt_id = DominantGroundTruthId(region.mask, previous_gt);
+    const auto it = track_of.find(gt_id);
+    if (gt_id == 0 || it == track_of.end() || it->second->samples.size() <= i) continue;
+    const TrackSample& before = it->second->samples[i - 1];
+    const TrackSample& now = it->second->samples[i];
+    if (!before.present || !now.present || !before.moving) continue;
+    motions[region.track_id] =
+        T_wc_current.inverse() * now.T_world_object * before.T_world_object.inverse() * T_wc_previous;
+  }
+  return motions;
+}
+
 }  // namespace
 
 SequenceSegEval EvaluateSequenceWithGroundTruthPoses(const SegEvalOptions& options,
@@ -46,7 +71,7 @@ SequenceSegEval EvaluateSequenceWithGroundTruthPoses(const SegEvalOptions& optio
                     "seg-eval needs one ground-truth pose per frame (--poses gt)");
   }
   const InstanceTable instances = InstanceTable::Read(dir / "instances.json");
-  std::optional<std::map<std::uint16_t, const ObjectTrack*>> track_of;
+  std::optional<TrackIndex> track_of;
   std::vector<ObjectTrack> tracks;
   if (options.object_motion && fs::exists(dir / "tracks.json")) {
     tracks = ReadTracks(dir / "tracks.json");
@@ -82,20 +107,10 @@ SequenceSegEval EvaluateSequenceWithGroundTruthPoses(const SegEvalOptions& optio
     input.T_wc_current_coarse = sequence.groundtruth()[i].T_wc;
     input.current_initial = initial;
     input.camera = camera;
-    // Moving objects are projected with their own ground-truth motion (with ground-truth
-    // poses every pose is the true one): T_cur_prev = T_cw(t) T_wo(t) T_ow(t-1) T_wc(t-1).
+    // Moving objects are projected with their own ground-truth motion.
     if (previous_refined && track_of) {
-      for (const auto& region : previous_refined->instances) {
-        const std::uint16_t gt_id = DominantGroundTruthId(region.mask, previous_gt);
-        const auto it = track_of->find(gt_id);
-        if (gt_id == 0 || it == track_of->end() || it->second->samples.size() <= i) continue;
-        const TrackSample& before = it->second->samples[i - 1];
-        const TrackSample& now = it->second->samples[i];
-        if (!before.present || !now.present || !before.moving) continue;
-        input.instance_motion_prev[region.track_id] =
-            input.T_wc_current_coarse.inverse() * now.T_world_object *
-            before.T_world_object.inverse() * input.T_wc_previous_fine;
-      }
+      input.instance_motion_prev = GroundTruthRegionMotions(*previous_refined, previous_gt, *track_of, i,
+                                                            input.T_wc_previous_fine, input.T_wc_current_coarse);
     }
     const auto refine_start = std::chrono::steady_clock::now();
     refinement = refiner.Refine(input);
