@@ -22,11 +22,41 @@ struct RegionStats {
   double cx = 0, cy = 0;
 };
 
+// Builds RegionStats from a region's rows, top to bottom.
+class RegionStatsAccumulator {
+ public:
+  // Row y holds `count` > 0 pixels of the region, the first at first_x, the last at
+  // last_x; sum_x is the sum of their columns.
+  void AddRow(int y, int first_x, int last_x, int count, std::int64_t sum_x) {
+    x_min_ = std::min(x_min_, first_x);
+    x_max_ = std::max(x_max_, last_x);
+    y_min_ = std::min(y_min_, y);
+    y_max_ = y;
+    area_px_ += count;
+    sum_x_ += sum_x;
+    sum_y_ += static_cast<std::int64_t>(y) * count;
+  }
+
+  RegionStats Result() const {
+    RegionStats s;
+    if (area_px_ == 0) return s;
+    s.area_px = area_px_;
+    s.bbox = cv::Rect(x_min_, y_min_, x_max_ - x_min_ + 1, y_max_ - y_min_ + 1);
+    s.cx = static_cast<double>(sum_x_) / area_px_;
+    s.cy = static_cast<double>(sum_y_) / area_px_;
+    return s;
+  }
+
+ private:
+  int x_min_ = std::numeric_limits<int>::max(), x_max_ = -1;
+  int y_min_ = std::numeric_limits<int>::max(), y_max_ = -1;
+  int area_px_ = 0;
+  std::int64_t sum_x_ = 0, sum_y_ = 0;
+};
+
 // Row-wise scan; rows without any set pixel are skipped 8 bytes at a time.
 RegionStats Measure(const cv::Mat& mask) {
-  RegionStats s;
-  int x_min = mask.cols, x_max = -1, y_min = mask.rows, y_max = -1;
-  std::int64_t sum_x = 0, sum_y = 0;
+  RegionStatsAccumulator region;
   for (int y = 0; y < mask.rows; ++y) {
     const std::uint8_t* row = mask.ptr<std::uint8_t>(y);
     int x = 0;
@@ -55,21 +85,9 @@ RegionStats Measure(const cv::Mat& mask) {
         row_sum += x;
       }
     }
-    if (count == 0) continue;
-    x_min = std::min(x_min, first);
-    x_max = std::max(x_max, last);
-    y_min = std::min(y_min, y);
-    y_max = y;
-    s.area_px += count;
-    sum_x += row_sum;
-    sum_y += static_cast<std::int64_t>(y) * count;
+    if (count > 0) region.AddRow(y, first, last, count, row_sum);
   }
-  if (s.area_px > 0) {
-    s.bbox = cv::Rect(x_min, y_min, x_max - x_min + 1, y_max - y_min + 1);
-    s.cx = static_cast<double>(sum_x) / s.area_px;
-    s.cy = static_cast<double>(sum_y) / s.area_px;
-  }
-  return s;
+  return region.Result();
 }
 
 void CheckInputImage(const cv::Mat& image, int type, const PinholeCamera& camera,
@@ -354,33 +372,21 @@ void DropOccluded(const RefinerOptions& options, const cv::Mat& current_depth_m,
 
 // Box, area and barycentre of the pixels labelled `id`, searched within `area`.
 RegionStats MeasureLabel(const cv::Mat& label, std::uint16_t id, const cv::Rect& area) {
-  RegionStats s;
-  int bx0 = label.cols, by0 = label.rows, bx1 = -1, by1 = -1;
-  std::int64_t sum_x = 0, sum_y = 0;
+  RegionStatsAccumulator region;
   for (int y = area.y; y < area.br().y; ++y) {
     const std::uint16_t* lr = label.ptr<std::uint16_t>(y);
-    int count = 0;
+    int count = 0, first = -1, last = -1;
+    std::int64_t row_sum = 0;
     for (int x = area.x; x < area.br().x; ++x) {
-      if (lr[x] == id) {
-        bx0 = std::min(bx0, x);
-        bx1 = std::max(bx1, x);
-        ++count;
-        sum_x += x;
-      }
+      if (lr[x] != id) continue;
+      if (first < 0) first = x;
+      last = x;
+      ++count;
+      row_sum += x;
     }
-    if (count > 0) {
-      by0 = std::min(by0, y);
-      by1 = y;
-      s.area_px += count;
-      sum_y += static_cast<std::int64_t>(y) * count;
-    }
+    if (count > 0) region.AddRow(y, first, last, count, row_sum);
   }
-  if (s.area_px > 0) {
-    s.bbox = cv::Rect(bx0, by0, bx1 - bx0 + 1, by1 - by0 + 1);
-    s.cx = static_cast<double>(sum_x) / s.area_px;
-    s.cy = static_cast<double>(sum_y) / s.area_px;
-  }
-  return s;
+  return region.Result();
 }
 
 // The projection proper: forward-splats each previous region with its depth and motion
