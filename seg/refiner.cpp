@@ -25,16 +25,19 @@ struct RegionStats {
 // Builds RegionStats from a region's rows, top to bottom.
 class RegionStatsAccumulator {
  public:
-  // Row y holds `count` > 0 pixels of the region, the first at first_x, the last at
-  // last_x; sum_x is the sum of their columns.
-  void AddRow(int y, int first_x, int last_x, int count, std::int64_t sum_x) {
-    x_min_ = std::min(x_min_, first_x);
-    x_max_ = std::max(x_max_, last_x);
-    y_min_ = std::min(y_min_, y);
-    y_max_ = y;
-    area_px_ += count;
-    sum_x_ += sum_x;
-    sum_y_ += static_cast<std::int64_t>(y) * count;
+  // Adds the pixels x in [x_begin, x_end) of row y for which inside(row[x]) holds.
+  template <typename Pixel, typename Inside>
+  void AddRow(int y, const Pixel* row, int x_begin, int x_end, Inside inside) {
+    int count = 0, first = -1, last = -1;
+    std::int64_t sum_x = 0;
+    for (int x = x_begin; x < x_end; ++x) {
+      if (!inside(row[x])) continue;
+      if (first < 0) first = x;
+      last = x;
+      ++count;
+      sum_x += x;
+    }
+    if (count > 0) AddRowSpan(y, first, last, count, sum_x);
   }
 
   RegionStats Result() const {
@@ -48,6 +51,18 @@ class RegionStatsAccumulator {
   }
 
  private:
+  // Row y holds `count` > 0 pixels of the region, the first at first_x, the last at
+  // last_x; sum_x is the sum of their columns.
+  void AddRowSpan(int y, int first_x, int last_x, int count, std::int64_t sum_x) {
+    x_min_ = std::min(x_min_, first_x);
+    x_max_ = std::max(x_max_, last_x);
+    y_min_ = std::min(y_min_, y);
+    y_max_ = y;
+    area_px_ += count;
+    sum_x_ += sum_x;
+    sum_y_ += static_cast<std::int64_t>(y) * count;
+  }
+
   int x_min_ = std::numeric_limits<int>::max(), x_max_ = -1;
   int y_min_ = std::numeric_limits<int>::max(), y_max_ = -1;
   int area_px_ = 0;
@@ -75,17 +90,7 @@ RegionStats Measure(const cv::Mat& mask) {
       if (word != 0) break;
       end -= 8;
     }
-    int count = 0, first = -1, last = -1;
-    std::int64_t row_sum = 0;
-    for (; x < end; ++x) {
-      if (row[x]) {
-        if (first < 0) first = x;
-        last = x;
-        ++count;
-        row_sum += x;
-      }
-    }
-    if (count > 0) region.AddRow(y, first, last, count, row_sum);
+    region.AddRow(y, row, x, end, [](std::uint8_t value) { return value != 0; });
   }
   return region.Result();
 }
@@ -374,17 +379,8 @@ void DropOccluded(const RefinerOptions& options, const cv::Mat& current_depth_m,
 RegionStats MeasureLabel(const cv::Mat& label, std::uint16_t id, const cv::Rect& area) {
   RegionStatsAccumulator region;
   for (int y = area.y; y < area.br().y; ++y) {
-    const std::uint16_t* lr = label.ptr<std::uint16_t>(y);
-    int count = 0, first = -1, last = -1;
-    std::int64_t row_sum = 0;
-    for (int x = area.x; x < area.br().x; ++x) {
-      if (lr[x] != id) continue;
-      if (first < 0) first = x;
-      last = x;
-      ++count;
-      row_sum += x;
-    }
-    if (count > 0) region.AddRow(y, first, last, count, row_sum);
+    region.AddRow(y, label.ptr<std::uint16_t>(y), area.x, area.br().x,
+                  [id](std::uint16_t value) { return value == id; });
   }
   return region.Result();
 }
