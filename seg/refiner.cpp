@@ -635,58 +635,94 @@ std::uint16_t SegmentationRefiner::FreshId() {
   return next_track_id_++;
 }
 
+namespace {
+
+// Unmatched projections of previous regions: each is added back (the instance the
+// segmenter missed, carried by its projection, its score decayed) when the add rule
+// allows it, else dropped. The paper's count rule adds only when the previous frame had
+// more regions than the current one.
+void AddBackUnmatchedProjections(const RefinerOptions& options, const FrameSegmentation& previous,
+                                 const std::vector<bool>& previous_matched, bool count_rule_holds,
+                                 const ProjectionWorkspace& ws, RefinementResult* result) {
+  for (size_t p = 0; p < previous.instances.size(); ++p) {
+    if (previous_matched[p]) continue;
+    const InstanceMask& prev = previous.instances[p];
+    RegionDecision d;
+    d.previous_index = static_cast<int>(p);
+    d.track_id = prev.track_id;
+    d.projected_area_px = ws.regions[p].area_px;
+    const float score = static_cast<float>(prev.score * options.added_score_decay);
+    const bool rule = options.add_unmatched == AddUnmatchedRule::kAlways ||
+                      (options.add_unmatched == AddUnmatchedRule::kPaperCountRule && count_rule_holds);
+    const bool add = rule && ws.regions[p].area_px >= std::max(1, options.min_projected_area_px) &&
+                     score >= options.min_added_score;
+    d.kind = add ? RegionDecision::Kind::kAdded : RegionDecision::Kind::kDropped;
+    if (add) {
+      InstanceMask instance;
+      instance.track_id = prev.track_id;
+      instance.category_id = prev.category_id;
+      instance.score = score;
+      instance.mask = RegionMask(ws, p);
+      result->refined.instances.push_back(std::move(instance));
+    }
+    result->decisions.push_back(d);
+  }
+}
+
+}  // namespace
+
+void SegmentationRefiner::ReserveIdsOf(const FrameSegmentation& previous) {
+  for (const InstanceMask& p : previous.instances) {
+    if (p.track_id >= next_track_id_ && p.track_id < 0xffff) {
+      next_track_id_ = static_cast<std::uint16_t>(p.track_id + 1);
+    }
+  }
+}
+
+RefinementResult SegmentationRefiner::AllNew(const FrameSegmentation& current) {
+  RefinementResult result;
+  result.refined.frame_index = current.frame_index;
+  for (size_t c = 0; c < current.instances.size(); ++c) {
+    InstanceMask instance = current.instances[c];
+    instance.track_id = FreshId();
+    RegionDecision d;
+    d.kind = RegionDecision::Kind::kNew;
+    d.track_id = instance.track_id;
+    d.current_index = static_cast<int>(c);
+    result.decisions.push_back(d);
+    result.refined.instances.push_back(std::move(instance));
+  }
+  return result;
+}
+
 RefinementResult SegmentationRefiner::Refine(const RefinerInput& in) {
   std::string error;
   if (!in.camera.IsValid(&error)) throw Error("refiner camera: " + error);
   const FrameSegmentation& current = in.current_initial;
-  const size_t n_cur = current.instances.size();
-  RefinementResult result;
-  result.refined.frame_index = current.frame_index;
-
   // Ids handed out elsewhere (a loaded previous segmentation) are never reused.
-  if (in.previous_refined) {
-    for (const InstanceMask& p : in.previous_refined->instances) {
-      if (p.track_id >= next_track_id_ && p.track_id < 0xffff) {
-        next_track_id_ = static_cast<std::uint16_t>(p.track_id + 1);
-      }
-    }
-  }
-
+  if (in.previous_refined) ReserveIdsOf(*in.previous_refined);
   // First frame (or no depth to project with): every region is new.
-  if (!in.previous_refined || in.previous_depth_m.empty()) {
-    for (size_t c = 0; c < n_cur; ++c) {
-      InstanceMask instance = current.instances[c];
-      instance.track_id = FreshId();
-      RegionDecision d;
-      d.kind = RegionDecision::Kind::kNew;
-      d.track_id = instance.track_id;
-      d.current_index = static_cast<int>(c);
-      result.decisions.push_back(d);
-      result.refined.instances.push_back(std::move(instance));
-    }
-    return result;
-  }
+  if (!in.previous_refined || in.previous_depth_m.empty()) return AllNew(current);
 
   const FrameSegmentation& previous = *in.previous_refined;
-  const size_t n_prev = previous.instances.size();
-  const Eigen::Isometry3d T_cur_prev =
-      in.T_wc_current_coarse.inverse() * in.T_wc_previous_fine;
-  ProjectInto(options_, in.camera, previous, in.previous_depth_m, T_cur_prev,
-              in.instance_motion_prev, in.current_depth_m, workspace_.get());
+  const Eigen::Isometry3d T_cur_prev = in.T_wc_current_coarse.inverse() * in.T_wc_previous_fine;
+  ProjectInto(options_, in.camera, previous, in.previous_depth_m, T_cur_prev, in.instance_motion_prev,
+              in.current_depth_m, workspace_.get());
   const ProjectionWorkspace& ws = *workspace_;
-  const std::vector<RegionStats>& prev_stats = ws.regions;
 
+  const size_t n_cur = current.instances.size();
   std::vector<RegionStats> cur_stats(n_cur);
   for (size_t c = 0; c < n_cur; ++c) {
     CheckInputImage(current.instances[c].mask, CV_8U, in.camera, "current instance mask");
     cur_stats[c] = Measure(current.instances[c].mask);
   }
-
   const std::vector<std::optional<RegionMatch>> match_of_cur =
       MatchRegions(options_, in.camera, previous, ws, current, cur_stats);
-  std::vector<bool> previous_matched(n_prev, false);
 
   // Current regions: keep or replace (Algorithm 1), or new.
+  RefinementResult result;
+  result.refined.frame_index = current.frame_index;
+  std::vector<bool> previous_matched(previous.instances.size(), false);
   for (size_t c = 0; c < n_cur; ++c) {
     InstanceMask instance = current.instances[c];
     RegionDecision d;
@@ -711,32 +747,8 @@ RefinementResult SegmentationRefiner::Refine(const RefinerInput& in) {
     result.refined.instances.push_back(std::move(instance));
   }
 
-  // Unmatched projections: add back missed instances.
-  const bool count_rule_holds = n_prev > n_cur;
-  for (size_t p = 0; p < n_prev; ++p) {
-    if (previous_matched[p]) continue;
-    const InstanceMask& prev = previous.instances[p];
-    RegionDecision d;
-    d.previous_index = static_cast<int>(p);
-    d.track_id = prev.track_id;
-    d.projected_area_px = prev_stats[p].area_px;
-    const float score = static_cast<float>(prev.score * options_.added_score_decay);
-    const bool rule = options_.add_unmatched == AddUnmatchedRule::kAlways ||
-                      (options_.add_unmatched == AddUnmatchedRule::kPaperCountRule &&
-                       count_rule_holds);
-    const bool add = rule && prev_stats[p].area_px >= std::max(1, options_.min_projected_area_px) &&
-                     score >= options_.min_added_score;
-    d.kind = add ? RegionDecision::Kind::kAdded : RegionDecision::Kind::kDropped;
-    if (add) {
-      InstanceMask instance;
-      instance.track_id = prev.track_id;
-      instance.category_id = prev.category_id;
-      instance.score = score;
-      instance.mask = RegionMask(ws, p);
-      result.refined.instances.push_back(std::move(instance));
-    }
-    result.decisions.push_back(d);
-  }
+  AddBackUnmatchedProjections(options_, previous, previous_matched, previous.instances.size() > n_cur, ws,
+                              &result);
   return result;
 }
 

@@ -274,6 +274,10 @@ class SegmentationRefiner {
 
  private:
   std::uint16_t FreshId();
+  // Fresh ids start after every id of `previous`.
+  void ReserveIdsOf(const FrameSegmentation& previous);
+  // Every region of `current` new, with a fresh id: the first frame, or no depth.
+  RefinementResult AllNew(const FrameSegmentation& current);
 
   RefinerOptions options_;
   std::uint16_t next_track_id_ = 1;
