@@ -119,41 +119,32 @@ std::vector<unsigned char> EncodeDepth(const cv::Mat& depth_m) {
   return EncodeDepthPng(depth_m, Frames().depth_factor);
 }
 
-void BM_EncodeColorPng(benchmark::State& state) {
-  cv::setNumThreads(1);
-  EncodeEach(state, Frames().color, EncodeColorPng);
-}
-BENCHMARK(BM_EncodeColorPng)->Unit(benchmark::kMillisecond);
+// Encoding and decoding of each kind of image, as BM_Encode<Kind>Png and BM_Decode<Kind>Png.
+struct PngKind {
+  const char* name;
+  std::vector<cv::Mat> BenchmarkFrames::*images;
+  std::vector<unsigned char> (*encode)(const cv::Mat&);
+};
 
-void BM_DecodeColorPng(benchmark::State& state) {
-  cv::setNumThreads(1);
-  DecodeEach(state, Frames().color, EncodeColorPng);
+void RegisterPngBenchmarks() {
+  static const PngKind kKinds[] = {{"Color", &BenchmarkFrames::color, EncodeColorPng},
+                                   {"Depth", &BenchmarkFrames::depth, EncodeDepth},
+                                   {"InstanceMask", &BenchmarkFrames::masks, EncodeInstanceMaskPng}};
+  for (const PngKind& kind : kKinds) {
+    benchmark::RegisterBenchmark((std::string("BM_Encode") + kind.name + "Png").c_str(),
+                                 [&kind](benchmark::State& state) {
+                                   cv::setNumThreads(1);
+                                   EncodeEach(state, Frames().*kind.images, kind.encode);
+                                 })
+        ->Unit(benchmark::kMillisecond);
+    benchmark::RegisterBenchmark((std::string("BM_Decode") + kind.name + "Png").c_str(),
+                                 [&kind](benchmark::State& state) {
+                                   cv::setNumThreads(1);
+                                   DecodeEach(state, Frames().*kind.images, kind.encode);
+                                 })
+        ->Unit(benchmark::kMillisecond);
+  }
 }
-BENCHMARK(BM_DecodeColorPng)->Unit(benchmark::kMillisecond);
-
-void BM_EncodeDepthPng(benchmark::State& state) {
-  cv::setNumThreads(1);
-  EncodeEach(state, Frames().depth, EncodeDepth);
-}
-BENCHMARK(BM_EncodeDepthPng)->Unit(benchmark::kMillisecond);
-
-void BM_DecodeDepthPng(benchmark::State& state) {
-  cv::setNumThreads(1);
-  DecodeEach(state, Frames().depth, EncodeDepth);
-}
-BENCHMARK(BM_DecodeDepthPng)->Unit(benchmark::kMillisecond);
-
-void BM_EncodeInstanceMaskPng(benchmark::State& state) {
-  cv::setNumThreads(1);
-  EncodeEach(state, Frames().masks, EncodeInstanceMaskPng);
-}
-BENCHMARK(BM_EncodeInstanceMaskPng)->Unit(benchmark::kMillisecond);
-
-void BM_DecodeInstanceMaskPng(benchmark::State& state) {
-  cv::setNumThreads(1);
-  DecodeEach(state, Frames().masks, EncodeInstanceMaskPng);
-}
-BENCHMARK(BM_DecodeInstanceMaskPng)->Unit(benchmark::kMillisecond);
 
 // Takes `--sequence DIR` (or `--sequence=DIR`) out of argv before Google Benchmark sees
 // it. Returns false, after printing why, on a missing value.
@@ -188,6 +179,7 @@ int main(int argc, char** argv) {
     std::cerr << "core_benchmarks: " << e.what() << "\n";
     return 1;
   }
+  segslam::RegisterPngBenchmarks();
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 2;
   benchmark::RunSpecifiedBenchmarks();
