@@ -1171,6 +1171,91 @@ class CityBuilder {
     return o;
   }
 
+  // A crosswalk on an arm the camera arrives on, with its route arc length.
+  struct Crosswalk {
+    Vec2 centre, along;
+    double s;
+    const RedLight* light;  // where the camera stands before it, or null
+  };
+
+  // The crosswalks pedestrians cross: those before the red lights when there are any,
+  // else those before the intersections ahead on the route.
+  std::vector<Crosswalk> CrosswalksOnRoute(const Poly2& forward, double f0) const {
+    // An explicit Vec2: an Eigen expression of a temporary must not be returned.
+    const auto crosswalk_before = [&](std::size_t k) -> Vec2 {
+      return NodePos(nodes_[k]) - kStreetDirs[dirs_[k]] * (road_ / 2 + 2.0);
+    };
+    std::vector<Crosswalk> crosswalks;
+    for (const RedLight& r : red_lights_) crosswalks.push_back({crosswalk_before(r.node), r.arrive, 0.0, &r});
+    if (!red_lights_.empty()) return crosswalks;
+    for (std::size_t k = 0; k < nodes_.size(); ++k) {
+      const Vec2 a = kStreetDirs[dirs_[k]];
+      const Vec2 centre = crosswalk_before(k);
+      const double s = forward.Closest(centre + Right(a) * lane_) - f0;
+      if (s > 24.0 && s < lane_s_.back() + 30.0) crosswalks.push_back({centre, a, s, nullptr});
+    }
+    return crosswalks;
+  }
+
+  // Crossing pedestrian k of `crossers` at `speed`, attempt `a` of its placement: over a
+  // crosswalk (spread by k for the first attempts), in the middle of the street when the
+  // camera is 16-32 m before it; at a red light, while the camera stands, and off the
+  // street before it turns green.
+  PathMotion CrossingWalkerMotion(std::mt19937_64& rng, const std::vector<Crosswalk>& crosswalks, int k,
+                                  int crossers, double speed, int a) const {
+    const Crosswalk& c = crosswalks[(k * crosswalks.size() / crossers + a / 4) % crosswalks.size()];
+    const double side = Chance(rng, 0.5) ? 1.0 : -1.0;  // starts right (+1) or left
+    const double w = road_ / 2 + walk_ * Uniform(rng, 0.45, 0.6);
+    // A crowd at a red light spreads over the crosswalk's width (the far part: the near
+    // edge is 2.5 m from the camera) to pass each other, and keeps to the sidewalks of the
+    // camera's street before and after, off the way the camera takes when the light turns
+    // green.
+    const Vec2 line = c.centre + c.along * (c.light ? Uniform(rng, -0.5, 1.3) : 0.0);
+    const Vec2 from = line + Right(c.along) * side * w, to = line - Right(c.along) * side * w;
+    double before = -1.0, after = -1.0;
+    if (!c.light) {
+      before = Chance(rng, 0.5) ? 1.0 : -1.0;
+      after = Chance(rng, 0.5) ? 1.0 : -1.0;
+    }
+    const double leg = 60.0;
+    PathMotion p = WalkPath({from + c.along * before * leg, from, to, to + c.along * after * leg});
+    p.speed_mps = speed;
+    double t_mid;
+    if (c.light) {
+      const double earliest = c.light->stand_from_s + 1.0;
+      const double latest = c.light->stand_until_s - 1.0 - w / speed;
+      t_mid = Uniform(rng, earliest, std::max(earliest, latest));
+    } else {
+      t_mid = CameraTimeAt(std::max(0.0, c.s - Uniform(rng, 16.0, 32.0)));
+    }
+    p.start_offset_m = leg + w - speed * t_mid;
+    return p;
+  }
+
+  // Pedestrian `rank` of `walkers` on the sidewalks, attempt `a`: walks along the street
+  // 12-30 m ahead of where the camera is at a time spread over the pass (by rank for the
+  // first ten attempts), on alternating sides.
+  PathMotion SidewalkWalkerMotion(std::mt19937_64& rng, const Poly2& forward, double f0, int rank, int walkers,
+                                  double speed, int a) const {
+    const double duration = (world_.frames_per_pass[0] - 1) / s_.camera.fps;
+    const double u = a < 10 ? (rank + Uniform(rng, 0.1, 0.9)) / walkers : Uniform(rng, 0, 1);
+    const double t_meet = u * duration;
+    const double s = CameraArc(t_meet) + Uniform(rng, 12.0, 30.0);
+    const Vec2 t = forward.Tangent(f0 + s);
+    const Vec2 along = std::abs(t.x()) >= std::abs(t.y()) ? Vec2(t.x() > 0 ? 1 : -1, 0) : Vec2(0, t.y() > 0 ? 1 : -1);
+    Vec2 axis = forward.At(f0 + s) - Right(along) * lane_;
+    if (along.x() != 0) axis.y() = block_ * std::round(axis.y() / block_);  // snap to the street line
+    else axis.x() = block_ * std::round(axis.x() / block_);
+    const double side = (rank + a) % 2 == 0 ? 1.0 : -1.0;
+    const Vec2 at = axis + Right(along) * side * (road_ / 2 + walk_ * Uniform(rng, 0.45, 0.6));
+    const double heading = Chance(rng, 0.5) ? 1.0 : -1.0;
+    const double leg = 80.0;
+    PathMotion p = WalkPath({at - along * heading * leg, at + along * heading * leg});
+    p.speed_mps = speed;
+    p.start_offset_m = leg - speed * t_meet;
+    return p;
+  }
+
   // Pedestrians on the sidewalks of the route's streets, walking both ways, each timed to
   // be 12-30 m ahead of the camera at a time spread over the pass; crossing_share of them
   // cross the route's street at a crosswalk ahead while the camera is 16-32 m away, or,
@@ -1179,30 +1264,10 @@ class CityBuilder {
     std::mt19937_64 rng = Rng("pedestrians" + traffic.tag);
     const int n = spec_.pedestrians;
     if (n <= 0) return;
-    const double ext = 300.0;
-    const double duration = (world_.frames_per_pass[0] - 1) / s_.camera.fps;
+    const double ext = CarLanes::kExtensionM;
     const Poly2 forward(NodeLane(RouteNodes(), lane_, ext, ext));
     const double f0 = ext + block_ / 2;
-    auto axis_dir = [](const Vec2& t) {
-      return std::abs(t.x()) >= std::abs(t.y()) ? Vec2(t.x() > 0 ? 1 : -1, 0) : Vec2(0, t.y() > 0 ? 1 : -1);
-    };
-    // Crosswalks on the arms the camera arrives on, with their route arc length.
-    struct Crosswalk {
-      Vec2 centre, along;
-      double s;
-      const RedLight* light;  // where the camera stands before it, or null
-    };
-    std::vector<Crosswalk> crosswalks;
-    auto crosswalk_before = [&](std::size_t k) -> Vec2 { return NodePos(nodes_[k]) - kStreetDirs[dirs_[k]] * (road_ / 2 + 2.0); };
-    for (const RedLight& r : red_lights_) crosswalks.push_back({crosswalk_before(r.node), r.arrive, 0.0, &r});
-    if (red_lights_.empty()) {
-      for (std::size_t k = 0; k < nodes_.size(); ++k) {
-        const Vec2 a = kStreetDirs[dirs_[k]];
-        const Vec2 centre = crosswalk_before(k);
-        const double s = forward.Closest(centre + Right(a) * lane_) - f0;
-        if (s > 24.0 && s < lane_s_.back() + 30.0) crosswalks.push_back({centre, a, s, nullptr});
-      }
-    }
+    const std::vector<Crosswalk> crosswalks = CrosswalksOnRoute(forward, f0);
     const int crossers = crosswalks.empty() ? 0 : static_cast<int>(std::lround(spec_.crossing_share * n));
     for (int k = 0; k < n; ++k) {
       MakePedestrian(rng);
@@ -1210,55 +1275,10 @@ class CityBuilder {
       const double speed = spec_.pedestrian_speed_mps * Uniform(rng, 0.85, 1.15);
       std::function<PathMotion(int)> make;
       if (k < crossers) {
-        make = [&, k, speed](int a) {
-          const Crosswalk& c = crosswalks[(k * crosswalks.size() / crossers + a / 4) % crosswalks.size()];
-          const double side = Chance(rng, 0.5) ? 1.0 : -1.0;  // starts right (+1) or left
-          const double w = road_ / 2 + walk_ * Uniform(rng, 0.45, 0.6);
-          // A crowd at a red light spreads over the crosswalk's width (the far part: the
-          // near edge is 2.5 m from the camera) to pass each other, and keeps to the
-          // sidewalks of the camera's street before and after, off the way the camera
-          // takes when the light turns green.
-          const Vec2 line = c.centre + c.along * (c.light ? Uniform(rng, -0.5, 1.3) : 0.0);
-          const Vec2 from = line + Right(c.along) * side * w, to = line - Right(c.along) * side * w;
-          double before = -1.0, after = -1.0;
-          if (!c.light) {
-            before = Chance(rng, 0.5) ? 1.0 : -1.0;
-            after = Chance(rng, 0.5) ? 1.0 : -1.0;
-          }
-          const double leg = 60.0;
-          PathMotion p = WalkPath({from + c.along * before * leg, from, to, to + c.along * after * leg});
-          p.speed_mps = speed;
-          // In the middle of the street when the camera is 16-32 m before the crosswalk; at
-          // a red light, while the camera stands, and off the street before it turns green.
-          double t_mid;
-          if (c.light) {
-            const double earliest = c.light->stand_from_s + 1.0;
-            const double latest = c.light->stand_until_s - 1.0 - w / speed;
-            t_mid = Uniform(rng, earliest, std::max(earliest, latest));
-          } else {
-            t_mid = CameraTimeAt(std::max(0.0, c.s - Uniform(rng, 16.0, 32.0)));
-          }
-          p.start_offset_m = leg + w - speed * t_mid;
-          return p;
-        };
+        make = [&, k, speed](int a) { return CrossingWalkerMotion(rng, crosswalks, k, crossers, speed, a); };
       } else {
-        const int rank = k - crossers, walkers = n - crossers;
-        make = [&, rank, walkers, speed](int a) {
-          const double u = a < 10 ? (rank + Uniform(rng, 0.1, 0.9)) / walkers : Uniform(rng, 0, 1);
-          const double t_meet = u * duration;
-          const double s = CameraArc(t_meet) + Uniform(rng, 12.0, 30.0);
-          const Vec2 along = axis_dir(forward.Tangent(f0 + s));
-          Vec2 axis = forward.At(f0 + s) - Right(along) * lane_;
-          if (along.x() != 0) axis.y() = block_ * std::round(axis.y() / block_);  // snap to the street line
-          else axis.x() = block_ * std::round(axis.x() / block_);
-          const double side = (rank + a) % 2 == 0 ? 1.0 : -1.0;
-          const Vec2 at = axis + Right(along) * side * (road_ / 2 + walk_ * Uniform(rng, 0.45, 0.6));
-          const double heading = Chance(rng, 0.5) ? 1.0 : -1.0;
-          const double leg = 80.0;
-          PathMotion p = WalkPath({at - along * heading * leg, at + along * heading * leg});
-          p.speed_mps = speed;
-          p.start_offset_m = leg - speed * t_meet;
-          return p;
+        make = [&, rank = k - crossers, speed](int a) {
+          return SidewalkWalkerMotion(rng, forward, f0, rank, n - crossers, speed, a);
         };
       }
       // The crosswalk in front of a standing camera car is 4 m from the camera.
