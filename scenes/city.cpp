@@ -968,9 +968,9 @@ class CityBuilder {
     }
   }
 
-  // The lanes moving cars drive, as polylines extended 300 m at both ends so that no
-  // path ends while in view.
-  struct CarLanes {
+  // The lanes along the route (moving cars drive them, pedestrians are placed by the
+  // camera's), as polylines extended 300 m at both ends so that no path ends while in view.
+  struct RouteLanes {
     static constexpr double kExtensionM = 300.0;
     Poly2 forward;   // the camera's lane
     Poly2 same;      // cars ahead: the inner lane when the road has two, else the camera's
@@ -979,8 +979,8 @@ class CityBuilder {
     bool two_lanes;
   };
 
-  CarLanes MakeCarLanes() const {
-    const double ext = CarLanes::kExtensionM;
+  RouteLanes MakeRouteLanes() const {
+    const double ext = RouteLanes::kExtensionM;
     const std::vector<Node> fnodes = RouteNodes();
     const std::vector<Node> gnodes(fnodes.rbegin(), fnodes.rend());
     // A second lane in the camera's direction when the road is wide enough.
@@ -998,7 +998,7 @@ class CityBuilder {
     double s;
   };
 
-  std::vector<Crossing> CrossingsOnRoute(const CarLanes& lanes) const {
+  std::vector<Crossing> CrossingsOnRoute(const RouteLanes& lanes) const {
     std::vector<Crossing> crossings;
     for (std::size_t k = 0; k < nodes_.size(); ++k) {
       const double s = lanes.forward.Closest(NodePos(nodes_[k])) - lanes.f0;
@@ -1008,7 +1008,7 @@ class CityBuilder {
   }
 
   // Route arc length of the camera's turns.
-  std::vector<double> TurnsOnRoute(const CarLanes& lanes) const {
+  std::vector<double> TurnsOnRoute(const RouteLanes& lanes) const {
     std::vector<double> turns;
     for (std::size_t k = 1; k + 1 < nodes_.size(); ++k) {
       if (dirs_[k] != dirs_[k + 1]) turns.push_back(lanes.forward.Closest(NodePos(nodes_[k])) - lanes.f0);
@@ -1042,7 +1042,7 @@ class CityBuilder {
   // inner one at about the traffic's speed. One lane: a queue in front of the camera,
   // each car (rank 0 first) at least as fast as the one behind it, which is placed at
   // `previous_gap` ahead of the camera with `previous_speed`.
-  PathMotion AheadMotion(std::mt19937_64& rng, const CarLanes& lanes, int rank, double half_length, int a,
+  PathMotion AheadMotion(std::mt19937_64& rng, const RouteLanes& lanes, int rank, double half_length, int a,
                          double previous_gap, double previous_speed) const {
     PathMotion p = DrivePath(lanes.same.p);
     if (lanes.two_lanes) {
@@ -1064,7 +1064,7 @@ class CityBuilder {
   // Oncoming: meets the camera at a route position spread over the route (by rank among
   // `count` oncoming cars for the first ten attempts), not in a turn, where it would pass
   // beside the camera out of view.
-  PathMotion OncomingMotion(std::mt19937_64& rng, const CarLanes& lanes, const std::vector<double>& turns, int rank,
+  PathMotion OncomingMotion(std::mt19937_64& rng, const RouteLanes& lanes, const std::vector<double>& turns, int rank,
                             int count, int a) const {
     PathMotion p = DrivePath(lanes.opposite.p);
     p.speed_mps = spec_.moving_car_speed_mps * Uniform(rng, 0.85, 1.15);
@@ -1084,7 +1084,7 @@ class CityBuilder {
   // attempts spread the cars over the intersections by rank among `count`.
   PathMotion CrossingMotion(std::mt19937_64& rng, const std::vector<Crossing>& crossings, int rank, int count,
                             int a) const {
-    const double ext = CarLanes::kExtensionM;
+    const double ext = RouteLanes::kExtensionM;
     if (!red_lights_.empty()) {
       const std::size_t pick = a < 10 ? (rank + a / 3) % red_lights_.size()
                                       : UniformInt(rng, 0, static_cast<int>(red_lights_.size()) - 1);
@@ -1114,7 +1114,7 @@ class CityBuilder {
   void MakeMovingCars(const Traffic& traffic) {
     std::mt19937_64 rng = Rng("moving_cars" + traffic.tag);
     if (spec_.moving_cars <= 0) return;
-    const CarLanes lanes = MakeCarLanes();
+    const RouteLanes lanes = MakeRouteLanes();
     const std::vector<Crossing> crossings = CrossingsOnRoute(lanes);
     const std::vector<double> turns = TurnsOnRoute(lanes);
     const std::vector<CarRole> roles = MovingCarRoles(lanes.two_lanes, !crossings.empty());
@@ -1180,7 +1180,7 @@ class CityBuilder {
 
   // The crosswalks pedestrians cross: those before the red lights when there are any,
   // else those before the intersections ahead on the route.
-  std::vector<Crosswalk> CrosswalksOnRoute(const Poly2& forward, double f0) const {
+  std::vector<Crosswalk> CrosswalksOnRoute(const RouteLanes& lanes) const {
     // An explicit Vec2: an Eigen expression of a temporary must not be returned.
     const auto crosswalk_before = [&](std::size_t k) -> Vec2 {
       return NodePos(nodes_[k]) - kStreetDirs[dirs_[k]] * (road_ / 2 + 2.0);
@@ -1191,7 +1191,7 @@ class CityBuilder {
     for (std::size_t k = 0; k < nodes_.size(); ++k) {
       const Vec2 a = kStreetDirs[dirs_[k]];
       const Vec2 centre = crosswalk_before(k);
-      const double s = forward.Closest(centre + Right(a) * lane_) - f0;
+      const double s = lanes.forward.Closest(centre + Right(a) * lane_) - lanes.f0;
       if (s > 24.0 && s < lane_s_.back() + 30.0) crosswalks.push_back({centre, a, s, nullptr});
     }
     return crosswalks;
@@ -1235,8 +1235,10 @@ class CityBuilder {
   // Pedestrian `rank` of `walkers` on the sidewalks, attempt `a`: walks along the street
   // 12-30 m ahead of where the camera is at a time spread over the pass (by rank for the
   // first ten attempts), on alternating sides.
-  PathMotion SidewalkWalkerMotion(std::mt19937_64& rng, const Poly2& forward, double f0, int rank, int walkers,
+  PathMotion SidewalkWalkerMotion(std::mt19937_64& rng, const RouteLanes& lanes, int rank, int walkers,
                                   double speed, int a) const {
+    const Poly2& forward = lanes.forward;
+    const double f0 = lanes.f0;
     const double duration = (world_.frames_per_pass[0] - 1) / s_.camera.fps;
     const double u = a < 10 ? (rank + Uniform(rng, 0.1, 0.9)) / walkers : Uniform(rng, 0, 1);
     const double t_meet = u * duration;
@@ -1264,10 +1266,8 @@ class CityBuilder {
     std::mt19937_64 rng = Rng("pedestrians" + traffic.tag);
     const int n = spec_.pedestrians;
     if (n <= 0) return;
-    const double ext = CarLanes::kExtensionM;
-    const Poly2 forward(NodeLane(RouteNodes(), lane_, ext, ext));
-    const double f0 = ext + block_ / 2;
-    const std::vector<Crosswalk> crosswalks = CrosswalksOnRoute(forward, f0);
+    const RouteLanes lanes = MakeRouteLanes();
+    const std::vector<Crosswalk> crosswalks = CrosswalksOnRoute(lanes);
     const int crossers = crosswalks.empty() ? 0 : static_cast<int>(std::lround(spec_.crossing_share * n));
     for (int k = 0; k < n; ++k) {
       MakePedestrian(rng);
@@ -1278,7 +1278,7 @@ class CityBuilder {
         make = [&, k, speed](int a) { return CrossingWalkerMotion(rng, crosswalks, k, crossers, speed, a); };
       } else {
         make = [&, rank = k - crossers, speed](int a) {
-          return SidewalkWalkerMotion(rng, forward, f0, rank, n - crossers, speed, a);
+          return SidewalkWalkerMotion(rng, lanes, rank, n - crossers, speed, a);
         };
       }
       // The crosswalk in front of a standing camera car is 4 m from the camera.
