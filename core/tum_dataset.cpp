@@ -210,6 +210,81 @@ std::vector<std::pair<double, std::string>> ReadTumFileList(const std::filesyste
   return list;
 }
 
+namespace {
+
+// Camera: explicit argument, then camera.yaml, then the published TUM calibration.
+SequenceCamera ResolveSequenceCamera(const std::filesystem::path& dir,
+                                     const std::optional<SequenceCamera>& camera) {
+  const std::filesystem::path camera_yaml = dir / "camera.yaml";
+  if (camera) {
+    std::string error;
+    if (!camera->IsValid(&error)) throw FileError(dir, "invalid camera: " + error);
+    return *camera;
+  }
+  if (std::filesystem::exists(camera_yaml)) return ReadCameraYaml(camera_yaml);
+  std::filesystem::path normal = std::filesystem::absolute(dir).lexically_normal();
+  if (normal.filename().empty()) normal = normal.parent_path();
+  const auto known = TumDefaultCamera(normal.filename().string());
+  if (!known) {
+    throw FileError(camera_yaml,
+                    "no camera intrinsics: add camera.yaml with width, height, fx, fy, cx, "
+                    "cy, depth_factor (only TUM freiburg1/2/3 sequences have defaults)");
+  }
+  return *known;
+}
+
+std::vector<TumFrameEntry> ReadAssociations(const std::filesystem::path& associations) {
+  std::vector<TumFrameEntry> entries;
+  ForEachDataLine(associations, [&](const std::vector<std::string>& tokens,
+                                    const std::string& origin) {
+    if (tokens.size() != 4) {
+      throw Error(fmt::format(
+          "{}: expected 'rgb_stamp rgb_file depth_stamp depth_file', found {} fields", origin,
+          tokens.size()));
+    }
+    TumFrameEntry entry{ParseStamp(tokens[0], origin), tokens[1],
+                        ParseStamp(tokens[2], origin), tokens[3]};
+    if (!entries.empty() && !(entry.rgb_stamp_s > entries.back().rgb_stamp_s)) {
+      throw Error(fmt::format("{}: rgb timestamp {} does not increase", origin, tokens[0]));
+    }
+    entries.push_back(entry);
+  });
+  return entries;
+}
+
+// Frames: associations.txt if present (then rgb.txt/depth.txt are not needed), else
+// associate rgb.txt with depth.txt as TUM's associate.py does. Every listed image must exist.
+std::vector<TumFrameEntry> ReadFrameEntries(const std::filesystem::path& dir) {
+  const std::filesystem::path associations = dir / "associations.txt";
+  std::vector<TumFrameEntry> entries;
+  if (std::filesystem::exists(associations)) {
+    entries = ReadAssociations(associations);
+  } else {
+    for (const char* list : {"rgb.txt", "depth.txt"}) {
+      if (!std::filesystem::exists(dir / list)) {
+        throw FileError(dir / list, "file list does not exist (a TUM sequence needs rgb.txt "
+                                    "and depth.txt, or associations.txt)");
+      }
+    }
+    entries = AssociateByTimestamp(ReadTumFileList(dir / "rgb.txt"), ReadTumFileList(dir / "depth.txt"));
+  }
+  if (entries.empty()) {
+    throw FileError(std::filesystem::exists(associations) ? associations : dir,
+                    "sequence has no frames (no rgb/depth pairs)");
+  }
+  std::error_code ec;
+  for (const TumFrameEntry& entry : entries) {
+    for (const std::string* file : {&entry.rgb_file, &entry.depth_file}) {
+      if (!std::filesystem::is_regular_file(dir / *file, ec)) {
+        throw FileError(dir / *file, "image file listed in the sequence does not exist");
+      }
+    }
+  }
+  return entries;
+}
+
+}  // namespace
+
 TumSequence TumSequence::Open(const std::filesystem::path& dir,
                               std::optional<SequenceCamera> camera) {
   std::error_code ec;
@@ -224,67 +299,8 @@ TumSequence TumSequence::Open(const std::filesystem::path& dir,
   }
   TumSequence sequence;
   sequence.dir_ = dir;
-
-  // Camera: explicit argument, then camera.yaml, then the published TUM calibration.
-  const std::filesystem::path camera_yaml = dir / "camera.yaml";
-  if (camera) {
-    std::string error;
-    if (!camera->IsValid(&error)) throw FileError(dir, "invalid camera: " + error);
-    sequence.camera_ = *camera;
-  } else if (std::filesystem::exists(camera_yaml)) {
-    sequence.camera_ = ReadCameraYaml(camera_yaml);
-  } else {
-    std::filesystem::path normal = std::filesystem::absolute(dir).lexically_normal();
-    if (normal.filename().empty()) normal = normal.parent_path();
-    const auto known = TumDefaultCamera(normal.filename().string());
-    if (!known) {
-      throw FileError(camera_yaml,
-                      "no camera intrinsics: add camera.yaml with width, height, fx, fy, cx, "
-                      "cy, depth_factor (only TUM freiburg1/2/3 sequences have defaults)");
-    }
-    sequence.camera_ = *known;
-  }
-
-  // Frames: associations.txt if present (then rgb.txt/depth.txt are not needed), else
-  // associate rgb.txt with depth.txt as TUM's associate.py does.
-  const std::filesystem::path associations = dir / "associations.txt";
-  if (std::filesystem::exists(associations)) {
-    ForEachDataLine(associations, [&](const std::vector<std::string>& tokens,
-                                      const std::string& origin) {
-      if (tokens.size() != 4) {
-        throw Error(fmt::format(
-            "{}: expected 'rgb_stamp rgb_file depth_stamp depth_file', found {} fields", origin,
-            tokens.size()));
-      }
-      TumFrameEntry entry{ParseStamp(tokens[0], origin), tokens[1],
-                          ParseStamp(tokens[2], origin), tokens[3]};
-      if (!sequence.entries_.empty() &&
-          !(entry.rgb_stamp_s > sequence.entries_.back().rgb_stamp_s)) {
-        throw Error(fmt::format("{}: rgb timestamp {} does not increase", origin, tokens[0]));
-      }
-      sequence.entries_.push_back(entry);
-    });
-  } else {
-    for (const char* list : {"rgb.txt", "depth.txt"}) {
-      if (!std::filesystem::exists(dir / list)) {
-        throw FileError(dir / list, "file list does not exist (a TUM sequence needs rgb.txt "
-                                    "and depth.txt, or associations.txt)");
-      }
-    }
-    sequence.entries_ =
-        AssociateByTimestamp(ReadTumFileList(dir / "rgb.txt"), ReadTumFileList(dir / "depth.txt"));
-  }
-  if (sequence.entries_.empty()) {
-    throw FileError(std::filesystem::exists(associations) ? associations : dir,
-                    "sequence has no frames (no rgb/depth pairs)");
-  }
-  for (const TumFrameEntry& entry : sequence.entries_) {
-    for (const std::string* file : {&entry.rgb_file, &entry.depth_file}) {
-      if (!std::filesystem::is_regular_file(dir / *file, ec)) {
-        throw FileError(dir / *file, "image file listed in the sequence does not exist");
-      }
-    }
-  }
+  sequence.camera_ = ResolveSequenceCamera(dir, camera);
+  sequence.entries_ = ReadFrameEntries(dir);
   const std::filesystem::path groundtruth = dir / "groundtruth.txt";
   if (std::filesystem::exists(groundtruth)) {
     sequence.groundtruth_ = ReadTumTrajectory(groundtruth);
