@@ -219,6 +219,60 @@ void ScoreMovingDetection(const std::vector<LoggedFrame>& frames, const fs::path
   pass->moving = scores;
 }
 
+// ATE: Horn-aligned, or in pass 1's aligned frame (see the header).
+void ScoreAte(const std::vector<StampedPose>& ground_truth, const std::vector<StampedPose>& estimate,
+              const std::optional<Eigen::Isometry3d>& fixed_alignment, PassEvaluation* pass) {
+  pass->ate_aligned = !fixed_alignment.has_value();
+  const std::size_t needed = pass->ate_aligned ? 3 : 1;
+  if (estimate.size() < needed) {
+    pass->ate_missing_reason = fmt::format("{} pose(s) estimated, ATE needs {}", estimate.size(), needed);
+    return;
+  }
+  AteOptions ate_options;
+  std::vector<StampedPose> moved = estimate;
+  if (fixed_alignment.has_value()) {
+    ate_options.align = false;
+    for (StampedPose& pose : moved) pose.T_wc = *fixed_alignment * pose.T_wc;
+  }
+  try {
+    const AteResult ate = ComputeAte(ground_truth, moved, ate_options);
+    pass->ate_m = ate.translation_m;
+    pass->T_gt_est = fixed_alignment.has_value() ? *fixed_alignment : ate.T_gt_est;
+  } catch (const Error& e) {
+    pass->ate_missing_reason = e.what();
+  }
+}
+
+// RPE over 1 s, as evaluate_rpe.py --fixed_delta --delta 1 --delta_unit s.
+void ScoreRpe(const std::vector<StampedPose>& ground_truth, const std::vector<StampedPose>& estimate,
+              PassEvaluation* pass) {
+  if (estimate.size() < 2) {
+    pass->rpe_missing_reason = fmt::format("{} pose(s) estimated", estimate.size());
+    return;
+  }
+  try {
+    const RpeResult rpe = ComputeRpe(ground_truth, estimate, RpeOptions{});
+    pass->rpe_translation_m = rpe.translation_m;
+    pass->rpe_rotation_deg = Scaled(rpe.rotation_rad, kDegreesPerRadian);
+  } catch (const Error& e) {
+    pass->rpe_missing_reason = e.what();
+  }
+}
+
+// Raw vs refined masks, where the mutual loop scored them (seg.json of a run).
+void ReadLoopSegmentationScores(const fs::path& seg_file, PassEvaluation* pass) {
+  if (!fs::exists(seg_file)) return;
+  std::ifstream in(seg_file);
+  try {
+    const nlohmann::json seg = nlohmann::json::parse(in);
+    pass->seg_raw = MaskScoresFromJson(seg.at("raw"));
+    pass->seg_refined = MaskScoresFromJson(seg.at("refined"));
+    pass->segmenter = seg.value("segmenter", "");
+  } catch (const nlohmann::json::exception& e) {
+    throw FileError(seg_file, std::string("eval: malformed: ") + e.what());
+  }
+}
+
 PassEvaluation EvaluatePass(const std::string& name, const fs::path& run_dir, const fs::path& sequence_dir,
                             const std::optional<Eigen::Isometry3d>& fixed_alignment) {
   PassEvaluation pass;
@@ -248,54 +302,9 @@ PassEvaluation EvaluatePass(const std::string& name, const fs::path& run_dir, co
   const std::vector<StampedPose> ground_truth = ReadTumTrajectory(ground_truth_file);
   const std::vector<StampedPose> estimate = ReadTumTrajectory(trajectory_file);
 
-  // ATE: Horn-aligned, or in pass 1's aligned frame (see the header).
-  pass.ate_aligned = !fixed_alignment.has_value();
-  const std::size_t needed = pass.ate_aligned ? 3 : 1;
-  if (estimate.size() < needed) {
-    pass.ate_missing_reason = fmt::format("{} pose(s) estimated, ATE needs {}", estimate.size(), needed);
-  } else {
-    AteOptions ate_options;
-    std::vector<StampedPose> moved = estimate;
-    if (fixed_alignment.has_value()) {
-      ate_options.align = false;
-      for (StampedPose& pose : moved) pose.T_wc = *fixed_alignment * pose.T_wc;
-    }
-    try {
-      const AteResult ate = ComputeAte(ground_truth, moved, ate_options);
-      pass.ate_m = ate.translation_m;
-      pass.T_gt_est = fixed_alignment.has_value() ? *fixed_alignment : ate.T_gt_est;
-    } catch (const Error& e) {
-      pass.ate_missing_reason = e.what();
-    }
-  }
-
-  // RPE over 1 s, as evaluate_rpe.py --fixed_delta --delta 1 --delta_unit s.
-  if (estimate.size() < 2) {
-    pass.rpe_missing_reason = fmt::format("{} pose(s) estimated", estimate.size());
-  } else {
-    try {
-      const RpeResult rpe = ComputeRpe(ground_truth, estimate, RpeOptions{});
-      pass.rpe_translation_m = rpe.translation_m;
-      pass.rpe_rotation_deg = Scaled(rpe.rotation_rad, kDegreesPerRadian);
-    } catch (const Error& e) {
-      pass.rpe_missing_reason = e.what();
-    }
-  }
-
-  // Raw vs refined masks, where the mutual loop scored them.
-  const fs::path seg_file = run_dir / "seg.json";
-  if (fs::exists(seg_file)) {
-    std::ifstream in(seg_file);
-    nlohmann::json seg;
-    try {
-      seg = nlohmann::json::parse(in);
-      pass.seg_raw = MaskScoresFromJson(seg.at("raw"));
-      pass.seg_refined = MaskScoresFromJson(seg.at("refined"));
-      pass.segmenter = seg.value("segmenter", "");
-    } catch (const nlohmann::json::exception& e) {
-      throw FileError(seg_file, std::string("eval: malformed: ") + e.what());
-    }
-  }
+  ScoreAte(ground_truth, estimate, fixed_alignment, &pass);
+  ScoreRpe(ground_truth, estimate, &pass);
+  ReadLoopSegmentationScores(run_dir / "seg.json", &pass);
 
   // Moving-object detection over judged instances (MovingDetectionScores).
   ScoreMovingDetection(frames, run_dir, sequence_dir, &pass);
