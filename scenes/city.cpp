@@ -158,12 +158,27 @@ class CityBuilder {
   // A random walk over intersections (straight more often than turning, never reusing a
   // street if it can avoid it), then the right-hand lane through it with rounded turns.
   void PlanRoute() {
+    WalkStreetGrid();
+    SetGridBounds();
+    // Directed route edges (the one leading into node 0 included).
+    const Node before{nodes_[0].first - static_cast<int>(kStreetDirs[dirs_[0]].x()),
+                      nodes_[0].second - static_cast<int>(kStreetDirs[dirs_[0]].y())};
+    route_edges_.insert({before, nodes_[0]});
+    for (std::size_t k = 1; k < nodes_.size(); ++k) route_edges_.insert({nodes_[k - 1], nodes_[k]});
+    SampleLane(LaneCorners());
+  }
+
+  void WalkStreetGrid() {
     std::mt19937_64 rng = Rng("route");
     int dir = UniformInt(rng, 0, 3);
     Node node{0, 0};
     nodes_ = {node};
     dirs_ = {dir};
     std::set<std::pair<Node, Node>> used;
+    const auto step = [](const Node& from, int direction) {
+      return Node{from.first + static_cast<int>(kStreetDirs[direction].x()),
+                  from.second + static_cast<int>(kStreetDirs[direction].y())};
+    };
     // Enough streets for the route plus the half block before the first node.
     const int edges_needed = static_cast<int>(std::ceil(spec_.route_length_m / block_)) + 2;
     for (int e = 0; e < edges_needed; ++e) {
@@ -173,15 +188,13 @@ class CityBuilder {
       if (r > 0.55) std::swap(options[0], options[r > 0.775 ? 1 : 2]);
       int chosen = options[0];
       for (int o : options) {
-        const Node next{node.first + static_cast<int>(kStreetDirs[o].x()),
-                        node.second + static_cast<int>(kStreetDirs[o].y())};
+        const Node next = step(node, o);
         if (!used.count({std::min(node, next), std::max(node, next)})) {
           chosen = o;
           break;
         }
       }
-      const Node next{node.first + static_cast<int>(kStreetDirs[chosen].x()),
-                      node.second + static_cast<int>(kStreetDirs[chosen].y())};
+      const Node next = step(node, chosen);
       used.insert({std::min(node, next), std::max(node, next)});
       node = next;
       dir = chosen;
@@ -190,9 +203,11 @@ class CityBuilder {
     }
     // dirs_[k] is the direction arriving at nodes_[k] (k >= 1); dirs_[0] = leaving node 0.
     dirs_[0] = dirs_[1];
+  }
 
-    // Grid bounds: one block of margin around the route for streets with buildings on
-    // both sides, and a second ring of blocks so views down streets end in buildings.
+  // One block of margin around the route for streets with buildings on both sides, and a
+  // second ring of blocks so views down streets end in buildings.
+  void SetGridBounds() {
     imin_ = imax_ = jmin_ = jmax_ = 0;
     for (const Node& n : nodes_) {
       imin_ = std::min(imin_, n.first);
@@ -201,14 +216,11 @@ class CityBuilder {
       jmax_ = std::max(jmax_, n.second);
     }
     imin_ -= 1, jmin_ -= 1, imax_ += 1, jmax_ += 1;
+  }
 
-    // Directed route edges (the one leading into node 0 included).
-    const Node before{nodes_[0].first - static_cast<int>(kStreetDirs[dirs_[0]].x()),
-                      nodes_[0].second - static_cast<int>(kStreetDirs[dirs_[0]].y())};
-    route_edges_.insert({before, nodes_[0]});
-    for (std::size_t k = 1; k < nodes_.size(); ++k) route_edges_.insert({nodes_[k - 1], nodes_[k]});
-
-    // Lane polyline: from mid-block before node 0, through rounded corners.
+  // The lane's corner points: from mid-block before node 0, through rounded corners, to
+  // the last node.
+  std::vector<Vec2> LaneCorners() const {
     const double radius = std::min(6.0, block_ / 5);
     std::vector<Vec2> pts;
     const Vec2 d0 = kStreetDirs[dirs_[0]];
@@ -225,8 +237,11 @@ class CityBuilder {
     }
     const Vec2 dl = kStreetDirs[dirs_.back()];
     pts.push_back(NodePos(nodes_.back()) + Right(dl) * lane_);
+    return pts;
+  }
 
-    // Densify and cut at the route length.
+  // Points every 0.25 m or less along the corners' polyline, cut at the route length.
+  void SampleLane(const std::vector<Vec2>& pts) {
     lane_pts_.clear();
     lane_s_.clear();
     double s = 0;
