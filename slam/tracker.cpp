@@ -556,6 +556,24 @@ struct Tracker::Impl {
     return inliers >= min_inliers;
   }
 
+  // Puts the first frame at options.initial_T_wc and fixes the close-point depth; the
+  // keyframe follows in UpdateMaps(). False while the frame has too few features with depth.
+  bool InitializeMap() {
+    if (result.num_features_with_depth < options.min_initial_map_features) return false;
+    current.T_cw = options.initial_T_wc.inverse();
+    initialized = true;
+    pending_first_keyframe = true;
+    if (options.close_depth_m > 0) {
+      close_depth_m = options.close_depth_m;
+    } else {
+      std::vector<float> depths;
+      for (float d : current.features.depth_m) if (d > 0) depths.push_back(d);
+      std::nth_element(depths.begin(), depths.begin() + depths.size() / 2, depths.end());
+      close_depth_m = std::clamp(double(depths[depths.size() / 2]), 3.0, 25.0);
+    }
+    return true;
+  }
+
   // Relocalization against every map point: nearest-neighbour descriptor search with a
   // ratio test, RANSAC PnP, pose optimisation, then a local-map search.
   bool Relocalize() {
@@ -1188,20 +1206,7 @@ std::optional<Eigen::Isometry3d> Tracker::EstimateCoarsePose() {
   if (!s.initialized && !s.localization_mode) {
     // The first frame defines the map; it needs enough features with depth (checked
     // again in UpdateMaps() on those that may enter the map).
-    if (s.result.num_features_with_depth >= options_.min_initial_map_features) {
-      s.current.T_cw = options_.initial_T_wc.inverse();
-      s.initialized = true;
-      s.pending_first_keyframe = true;
-      if (options_.close_depth_m > 0) {
-        s.close_depth_m = options_.close_depth_m;
-      } else {
-        std::vector<float> depths;
-        for (float d : s.current.features.depth_m) if (d > 0) depths.push_back(d);
-        std::nth_element(depths.begin(), depths.begin() + depths.size() / 2, depths.end());
-        s.close_depth_m = std::clamp(double(depths[depths.size() / 2]), 3.0, 25.0);
-      }
-      tracked = true;
-    }
+    tracked = s.InitializeMap();
   } else if (s.have_last && !s.last_lost()) {
     tracked = s.TrackWithMotionModel() || s.TrackReferenceKeyframe();
     if (tracked) {
