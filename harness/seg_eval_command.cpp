@@ -105,6 +105,14 @@ void SetRefinerOption(seg::RefinerOptions* o, const std::string& assignment) {
   }
 }
 
+// Made when the first result is written, so that a refused dataset, mask folder or option
+// leaves no empty output folder behind.
+void CreateOutputFolder(const fs::path& out_dir) {
+  std::error_code error;
+  fs::create_directories(out_dir, error);
+  if (error) throw FileError(out_dir, "cannot create: " + error.message());
+}
+
 seg::SequenceSegEval EvaluateSequence(const SegEvalArgs& args, const fs::path& dir,
                                       const fs::path& out_dir) {
   std::unique_ptr<seg::Segmenter> segmenter;
@@ -136,6 +144,7 @@ seg::SequenceSegEval EvaluateSequence(const SegEvalArgs& args, const fs::path& d
 
   // The paper's Fig. 5: the last frame's ground truth, initial and refined instances.
   if (!out_dir.empty() && result.frames > 0) {
+    CreateOutputFolder(out_dir);
     const cv::Size size = result.last_gt_ids.size();
     const cv::Mat row = CaptionedRow(
         {OverlayPicture(result.last_color_bgr, result.last_gt_ids),
@@ -155,9 +164,6 @@ int RunSegEval(const SegEvalArgs& args) {
                 ": only 'gt' is available (poses from SLAM come with `segslam run`)");
   }
   const fs::path out_dir = args.out_dir.empty() ? fs::path(args.dataset) / "seg_eval" : fs::path(args.out_dir);
-  std::error_code error;
-  fs::create_directories(out_dir, error);
-  if (error) throw FileError(out_dir, "cannot create: " + error.message());
 
   std::vector<seg::SequenceSegEval> results;
   for (const fs::path& dir : SequencesOf(args.dataset)) results.push_back(EvaluateSequence(args, dir, out_dir));
@@ -195,6 +201,7 @@ int RunSegEval(const SegEvalArgs& args) {
                r.decision_counts[3], r.decision_counts[4]);
   }
   fmt::print("(points: percent; overlays of each sequence's last frame in {})\n", out_dir.string());
+  CreateOutputFolder(out_dir);
   WriteFileAtomically(out_dir / "seg_eval.json", json.dump(2) + "\n");
   return 0;
 }
