@@ -22,11 +22,14 @@ struct PreviewArgs {
   std::vector<int> frames{0};
   std::string out_file;
   double max_depth_m = 0;  // 0 = the 98th percentile of the first frame
+  std::string camera_file;  // for the depth scale of a sequence without camera.yaml
 };
 
 int RunPreview(const PreviewArgs& args) {
   namespace fs = std::filesystem;
-  const TumSequence sequence = TumSequence::Open(args.sequence_dir);
+  const TumSequence sequence =
+      args.camera_file.empty() ? TumSequence::Open(args.sequence_dir)
+                               : TumSequence::Open(args.sequence_dir, ReadCameraYaml(args.camera_file));
   std::vector<cv::Mat> rows;
   double max_depth_m = args.max_depth_m;
   for (int index : args.frames) {
@@ -71,6 +74,9 @@ void AddPreviewCommand(CLI::App& app, std::function<int()>* action) {
   command->add_option("--frames", args->frames, "Frame indices, e.g. 0,30,59")->delimiter(',');
   command->add_option("--out,-o", args->out_file, "Output PNG")->required();
   command->add_option("--max-depth", args->max_depth_m, "Depth colour scale in metres (0 = auto)");
+  command->add_option("--camera", args->camera_file,
+                      "camera.yaml to use instead of the sequence's own (its depth_factor scales the depth "
+                      "of a real sequence without one)");
   command->callback([args, action] { *action = [args] { return RunPreview(*args); }; });
 }
 
