@@ -1,8 +1,8 @@
-// `segslam bench slam` on a generated sequence (fixture sim_datasets): the per-stage
-// table and its JSON hold a time for every stage and the keyframes' bundle adjustment,
-// with a segmenter the mask refinement's too, and a sequence without camera intrinsics
-// needs --camera. Speed itself is what the command measures, so nothing here asserts how
-// fast.
+// `segslam bench render` on a small scenario, and `segslam bench slam` on a generated
+// sequence (fixture sim_datasets): the per-stage table and its JSON hold a time for every
+// stage and the keyframes' bundle adjustment, with a segmenter the mask refinement's too,
+// and a sequence without camera intrinsics needs --camera. Speed itself is what the
+// command measures, so nothing here asserts how fast.
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -91,6 +91,38 @@ TEST_F(BenchCliTest, SlamOnASequenceWithoutCameraNeedsCamera) {
   EXPECT_NE(refused.stderr_text.find((copy / "camera.yaml").string()), std::string::npos) << refused.stderr_text;
   const CommandOutput given = Run("bench slam " + copy.string() + " --mode plain --frames 3 --camera " + camera.string());
   EXPECT_EQ(given.exit_code, 0) << given.stderr_text;
+}
+
+// `segslam bench render` generates and renders a small scenario with each back-end (on a
+// machine without a GPU both run on Mesa's llvmpipe) and removes its scratch datasets.
+TEST_F(BenchCliTest, RenderMeasuresEachBackEndAndLeavesNoScratch) {
+  const fs::path scenario = fs::path(SEGSLAM_SOURCE_DIR) / "scenarios" / "test" / "office_small.yaml";
+  const fs::path work_dir = dir_ / "work";
+  fs::create_directories(work_dir);
+  const fs::path json_file = dir_ / "render.json";
+  const CommandOutput out = Run("bench render " + scenario.string() + " --frames 2 --work-dir " + work_dir.string() +
+                                " --json " + json_file.string());
+  ASSERT_EQ(out.exit_code, 0) << out.stderr_text;
+  EXPECT_NE(out.stdout_text.find("office_small (320x240), 4 frames per back-end"), std::string::npos)
+      << out.stdout_text;
+  const nlohmann::json json = nlohmann::json::parse(ReadText(json_file));
+  EXPECT_EQ(json.at("scenario"), "office_small");
+  ASSERT_EQ(json.at("backends").size(), 2u);
+  for (size_t k = 0; k < 2; ++k) {
+    const nlohmann::json& backend = json.at("backends")[k];
+    SCOPED_TRACE(backend.dump());
+    EXPECT_EQ(backend.at("backend"), k == 0 ? "osmesa" : "egl");
+    EXPECT_EQ(backend.at("frames"), 4) << "2 frames in each of the two passes";
+    EXPECT_GT(backend.at("generation_fps").get<double>(), 0.0);
+    EXPECT_GT(backend.at("render_only_fps").get<double>(), 0.0);
+    EXPECT_FALSE(backend.at("renderer").get<std::string>().empty());
+    EXPECT_NE(out.stdout_text.find(backend.at("renderer").get<std::string>()), std::string::npos);
+  }
+  EXPECT_TRUE(fs::is_empty(work_dir)) << "scratch datasets left in " << work_dir;
+
+  const CommandOutput unknown = Run("bench render " + scenario.string() + " --gl vulkan");
+  EXPECT_NE(unknown.exit_code, 0);
+  EXPECT_NE(unknown.stderr_text.find("vulkan"), std::string::npos) << unknown.stderr_text;
 }
 
 }  // namespace
