@@ -91,6 +91,7 @@ void SetRefinerOption(seg::RefinerOptions* o, const std::string& assignment) {
       {"fill_missing_depth_with_median", &o->fill_missing_depth_with_median},
       {"repair_missing_parts", &o->repair_missing_parts},
       {"trim_instead_of_replace", &o->trim_instead_of_replace},
+      {"trim_keeps_region_depth", &o->trim_keeps_region_depth},
   };
   if (auto it = doubles.find(name); it != doubles.end()) {
     *it->second = x;

@@ -520,6 +520,36 @@ std::vector<std::optional<RegionMatch>> MatchRegions(const RefinerOptions& optio
   return match_of_cur;
 }
 
+// Sets in *trimmed (over roi) the pixels of current_mask that the trim cut off but whose
+// current depth lies within projected region p's depth range, widened by depth_tolerance
+// (RefinerOptions::trim_keeps_region_depth).
+void KeepCutPixelsAtRegionDepth(const RefinerOptions& options, const ProjectionWorkspace& ws, size_t p,
+                                const cv::Mat& current_depth_m, const cv::Mat& current_mask, const cv::Rect& roi,
+                                cv::Mat* trimmed) {
+  const std::uint16_t id = static_cast<std::uint16_t>(p + 1);
+  float z_min = std::numeric_limits<float>::infinity(), z_max = 0;
+  for (int y = roi.y; y < roi.br().y; ++y) {
+    const std::uint16_t* label = ws.label.ptr<std::uint16_t>(y);
+    const float* z = ws.zbuf.ptr<float>(y);
+    for (int x = roi.x; x < roi.br().x; ++x) {
+      if (label[x] == id && HasDepth(z[x])) {
+        z_min = std::min(z_min, z[x]);
+        z_max = std::max(z_max, z[x]);
+      }
+    }
+  }
+  if (!(z_max > 0)) return;
+  const double low = z_min * (1 - options.depth_tolerance), high = z_max * (1 + options.depth_tolerance);
+  for (int y = 0; y < roi.height; ++y) {
+    const float* depth = current_depth_m.ptr<float>(roi.y + y) + roi.x;
+    const std::uint8_t* current = current_mask.ptr<std::uint8_t>(roi.y + y) + roi.x;
+    std::uint8_t* kept = trimmed->ptr<std::uint8_t>(y);
+    for (int x = 0; x < roi.width; ++x) {
+      if (current[x] != 0 && kept[x] == 0 && HasDepth(depth[x]) && depth[x] >= low && depth[x] <= high) kept[x] = 255;
+    }
+  }
+}
+
 // Algorithm 1 for a matched pair. *instance (a copy of the current region) keeps its
 // mask, or takes the projected region's: where it spills past the projection that it
 // covers (shrink; or it is trimmed to the projection, trim_instead_of_replace), or where
@@ -528,7 +558,7 @@ std::vector<std::optional<RegionMatch>> MatchRegions(const RefinerOptions& optio
 void RefineMatchedRegion(const RefinerOptions& options, const PinholeCamera& camera,
                          const ProjectionWorkspace& ws, const RegionMatch& match,
                          const RegionStats& cur_stats, const InstanceMask& previous,
-                         InstanceMask* instance, RegionDecision* decision) {
+                         const cv::Mat& current_depth_m, InstanceMask* instance, RegionDecision* decision) {
   const size_t p = static_cast<size_t>(match.p);
   const RegionStats& prev_stats = ws.regions[p];
   // Ratios up to the boundary tolerance: a pixel of one region counts as confirmed by
@@ -570,6 +600,9 @@ void RefineMatchedRegion(const RefinerOptions& options, const PinholeCamera& cam
   decision->projected_area_px = prev_stats.area_px;
   instance->track_id = previous.track_id;
   if (shrink && !repair && options.trim_instead_of_replace && !trimmed.empty()) {
+    if (options.trim_keeps_region_depth && !current_depth_m.empty()) {
+      KeepCutPixelsAtRegionDepth(options, ws, p, current_depth_m, instance->mask, roi, &trimmed);
+    }
     cv::Mat mask(instance->mask.size(), CV_8U, cv::Scalar(0));
     mask(roi).setTo(1, trimmed);
     instance->mask = mask;
@@ -730,7 +763,7 @@ RefinementResult SegmentationRefiner::Refine(const RefinerInput& in) {
     if (const std::optional<RegionMatch>& match = match_of_cur[c]) {
       previous_matched[static_cast<size_t>(match->p)] = true;
       RefineMatchedRegion(options_, in.camera, ws, *match, cur_stats[c],
-                          previous.instances[static_cast<size_t>(match->p)], &instance, &d);
+                          previous.instances[static_cast<size_t>(match->p)], in.current_depth_m, &instance, &d);
     } else {
       d.kind = RegionDecision::Kind::kNew;
       instance.track_id = FreshId();

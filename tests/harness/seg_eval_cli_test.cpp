@@ -100,6 +100,15 @@ TEST_F(SegEvalCliTest, CleanSegmenterScoresPerfectAndRefinementKeepsIt) {
     EXPECT_DOUBLE_EQ(scores.at("raw").at(metric).get<double>(), 1.0) << metric;
   }
   EXPECT_GE(scores.at("refined").at("mIoU").get<double>(), 0.99);
+
+  // Pass 2 has a walker whose region grows fast; the plain trim cuts it back (mAP 0.92
+  // there), a trim that keeps what lies at the region's depth keeps every mask.
+  const fs::path pass2 = kDataDir / "office_clean" / "pass2";
+  const nlohmann::json kept =
+      RunAndReadJson(pass2.string() + " --segmenter clean --refiner trim_keeps_region_depth=1", dir_ / "kept");
+  for (const char* metric : {"mAP", "AP50", "mIoU"}) {
+    EXPECT_DOUBLE_EQ(kept.at("sequences")[0].at("refined").at(metric).get<double>(), 1.0) << metric;
+  }
 }
 
 // Masks of an external segmenter, here the ground truth itself written in the external

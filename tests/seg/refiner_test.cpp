@@ -342,6 +342,42 @@ TEST(SegmentationRefinerTest, DefaultsKeepSlightlyLargerRegionsAndTrimGrossOnes)
   EXPECT_FLOAT_EQ(r.refined.instances[2].score, 0.5f);  // scores are the segmenter's
 }
 
+// trim_keeps_region_depth: person B twice as wide as its projection (gap ~0.5, trimmed by
+// default). Where the extra width has the person's depth, it grew (stepped in from behind
+// something): kept whole. Where the extra width shows the wall 2 m behind, it is bleeding:
+// trimmed as without the option.
+TEST(SegmentationRefinerTest, TrimKeepsWhatLiesAtTheRegionsDepth) {
+  const Scene scene;
+  const cv::Rect wide_b(scene.person_b.x, scene.person_b.y, 2 * scene.person_b.width, scene.person_b.height);
+  FrameSegmentation current;
+  current.instances.push_back(Instance(0, 1, RectMask(scene.person_a)));
+  current.instances.push_back(Instance(0, 62, RectMask(scene.chair)));
+  current.instances.push_back(Instance(0, 1, RectMask(wide_b)));
+  RefinerOptions options;
+  options.trim_keeps_region_depth = true;
+  const cv::Rect trimmed_b(scene.person_b.x, scene.person_b.y, scene.person_b.width + 2, scene.person_b.height);
+
+  RefinerInput grown = scene.Input(current);
+  grown.current_depth_m = scene.depth.clone();  // the whole wide region at 2 m
+  const RefinementResult kept = SegmentationRefiner(options).Refine(grown);
+  SCOPED_TRACE(kept.BriefReport());
+  ASSERT_EQ(kept.refined.instances.size(), 3u);
+  EXPECT_EQ(kept.decisions[2].kind, RegionDecision::Kind::kReplaced);  // the trim rule fired
+  EXPECT_EQ(Differences(kept.refined.instances[2].mask, RectMask(wide_b)), 0);
+
+  RefinerInput bled = scene.Input(current);
+  bled.current_depth_m = scene.depth.clone();
+  bled.current_depth_m(cv::Rect(scene.person_b.br().x, 0, 640 - scene.person_b.br().x, 480)).setTo(4.0);
+  const RefinementResult cut = SegmentationRefiner(options).Refine(bled);
+  SCOPED_TRACE(cut.BriefReport());
+  ASSERT_EQ(cut.refined.instances.size(), 3u);
+  EXPECT_EQ(cut.decisions[2].kind, RegionDecision::Kind::kReplaced);
+  EXPECT_LE(Differences(cut.refined.instances[2].mask, RectMask(trimmed_b)), 4);
+  // Without the option the grown region is trimmed too: what the option changes.
+  const RefinementResult plain_trim = SegmentationRefiner().Refine(grown);
+  EXPECT_LE(Differences(plain_trim.refined.instances[2].mask, RectMask(trimmed_b)), 4);
+}
+
 TEST(SegmentationRefinerTest, NoAddWhenCountsAreEqualAndCategoryMustMatch) {
   const Scene scene;
   FrameSegmentation current;
