@@ -308,6 +308,11 @@ TumSequence TumSequence::Open(const std::filesystem::path& dir,
   return sequence;
 }
 
+TumSequence TumSequence::OpenWithCameraFile(const std::filesystem::path& dir, const std::string& camera_yaml) {
+  if (camera_yaml.empty()) return Open(dir);
+  return Open(dir, ReadCameraYaml(camera_yaml));
+}
+
 RgbdFrame TumSequence::LoadFrame(size_t i) const {
   if (i >= entries_.size()) {
     throw FileError(dir_, fmt::format("frame {} out of range (sequence has {} frames)", i,

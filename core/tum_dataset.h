@@ -72,6 +72,9 @@ class TumSequence {
   // missing, non-increasing stamps, malformed lines, an empty sequence.
   static TumSequence Open(const std::filesystem::path& dir,
                           std::optional<SequenceCamera> camera = std::nullopt);
+  // Open() with the camera read from camera_yaml when one is named (the commands'
+  // --camera, for a real sequence without camera.yaml), else as Open(dir).
+  static TumSequence OpenWithCameraFile(const std::filesystem::path& dir, const std::string& camera_yaml);
 
   size_t size() const { return entries_.size(); }
   const std::vector<TumFrameEntry>& entries() const { return entries_; }

@@ -135,9 +135,7 @@ TimeSummary Summarize(std::vector<double> values) {
 int RunBenchSlam(const BenchSlamArgs& args) {
   // One core, as ORB-SLAM2's tracking thread: OpenCV's own threads would flatter us.
   cv::setNumThreads(1);
-  std::optional<SequenceCamera> camera;
-  if (!args.camera_file.empty()) camera = ReadCameraYaml(args.camera_file);
-  const TumSequence sequence = TumSequence::Open(args.sequence, camera);
+  const TumSequence sequence = TumSequence::OpenWithCameraFile(args.sequence, args.camera_file);
   SlamRunOptions options;
   options.mode = slam::ParseSlamMode(args.mode);
   options.masks = args.masks;

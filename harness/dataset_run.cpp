@@ -20,9 +20,7 @@ namespace {
 PassRun RunPass(const DatasetRunOptions& args, const std::string& name, const fs::path& sequence_dir,
                 const fs::path& map_in, const fs::path& map_out, const fs::path& out_dir,
                 const std::optional<Eigen::Isometry3d>& fixed_alignment) {
-  std::optional<SequenceCamera> camera;
-  if (!args.camera_file.empty()) camera = ReadCameraYaml(args.camera_file);
-  const TumSequence sequence = TumSequence::Open(sequence_dir, camera);
+  const TumSequence sequence = TumSequence::OpenWithCameraFile(sequence_dir, args.camera_file);
   SlamRunOptions options;
   options.mode = slam::ParseSlamMode(args.mode);
   options.masks = args.masks;

@@ -27,9 +27,7 @@ struct PreviewArgs {
 
 int RunPreview(const PreviewArgs& args) {
   namespace fs = std::filesystem;
-  const TumSequence sequence =
-      args.camera_file.empty() ? TumSequence::Open(args.sequence_dir)
-                               : TumSequence::Open(args.sequence_dir, ReadCameraYaml(args.camera_file));
+  const TumSequence sequence = TumSequence::OpenWithCameraFile(args.sequence_dir, args.camera_file);
   std::vector<cv::Mat> rows;
   double max_depth_m = args.max_depth_m;
   for (int index : args.frames) {
