@@ -1,5 +1,7 @@
 #include "core/option_assignment.h"
 
+#include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "core/error.h"
@@ -20,6 +22,20 @@ NumericAssignment ParseNumericAssignment(const std::string& assignment, const st
     throw Error(what + " " + parsed.name + ": not a number: '" + parsed.text + "'");
   }
   return parsed;
+}
+
+int WholeNumberValue(const NumericAssignment& parsed, const std::string& what) {
+  if (parsed.value != std::floor(parsed.value) || std::abs(parsed.value) > std::numeric_limits<int>::max()) {
+    throw Error(what + " " + parsed.name + ": not a whole number: '" + parsed.text + "'");
+  }
+  return static_cast<int>(parsed.value);
+}
+
+bool ZeroOrOneValue(const NumericAssignment& parsed, const std::string& what) {
+  if (parsed.value != 0 && parsed.value != 1) {
+    throw Error(what + " " + parsed.name + ": expected 0 or 1, got '" + parsed.text + "'");
+  }
+  return parsed.value == 1;
 }
 
 }  // namespace segslam

@@ -17,4 +17,9 @@ struct NumericAssignment {
 // "<what> <name>: not a number: '<value>'".
 NumericAssignment ParseNumericAssignment(const std::string& assignment, const std::string& what);
 
+// The value of an integer or boolean option. Throw segslam::Error "<what> <name>: not a
+// whole number" or "<what> <name>: expected 0 or 1".
+int WholeNumberValue(const NumericAssignment& parsed, const std::string& what);
+bool ZeroOrOneValue(const NumericAssignment& parsed, const std::string& what);
+
 }  // namespace segslam

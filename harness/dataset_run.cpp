@@ -5,6 +5,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "seg/refiner_option_overrides.h"
 #include "slam/tracker_option_overrides.h"
 
 namespace segslam::harness {
@@ -31,6 +32,7 @@ PassRun RunPass(const DatasetRunOptions& args, const std::string& name, const fs
   options.map_in = map_in;
   options.max_frames = args.frames;
   for (const std::string& assignment : args.tracker_options) slam::SetTrackerOption(&options.tracker, assignment);
+  for (const std::string& assignment : args.refiner_options) seg::SetRefinerOption(&options.refiner, assignment);
   options.on_frame = [&](int done, int total) {
     if (args.on_frame) args.on_frame(name, done, total);
   };
@@ -100,13 +102,25 @@ bool RunsMutualLoop(const DatasetRunOptions& options) {
   return options.mode == "mutual" && (!options.segmenter.empty() || options.masks != "gt");
 }
 
-std::vector<PassRun> RunDataset(const fs::path& dataset, const fs::path& out_dir, const DatasetRunOptions& options) {
-  slam::ParseSlamMode(options.mode);  // a bad mode or tracker option fails before anything is read or written
-  slam::TrackerOptions checked;
-  for (const std::string& assignment : options.tracker_options) slam::SetTrackerOption(&checked, assignment);
+void CheckDatasetRunOptions(const DatasetRunOptions& options) {
+  slam::ParseSlamMode(options.mode);
+  slam::TrackerOptions tracker;
+  for (const std::string& assignment : options.tracker_options) slam::SetTrackerOption(&tracker, assignment);
   if (!options.segmenter.empty() && options.masks != "gt") {
     throw Error("run: --segmenter " + options.segmenter + " and --masks " + options.masks + " exclude each other");
   }
+  if (!options.refiner_options.empty()) {
+    if (!RunsMutualLoop(options)) {
+      throw Error("run: --refiner applies to the mutual loop: mode mutual with --segmenter or --masks");
+    }
+    seg::RefinerOptions refiner;
+    for (const std::string& assignment : options.refiner_options) seg::SetRefinerOption(&refiner, assignment);
+    if (std::string problem; !refiner.IsValid(&problem)) throw Error("run: --refiner: " + problem);
+  }
+}
+
+std::vector<PassRun> RunDataset(const fs::path& dataset, const fs::path& out_dir, const DatasetRunOptions& options) {
+  CheckDatasetRunOptions(options);
   std::vector<PassRun> passes;
   if (IsTwoPassDataset(dataset)) {
     if (!options.map_in.empty()) {

@@ -34,6 +34,9 @@ struct DatasetRunOptions {
   int frames = 0;                 // first N frames of each sequence (0 = all)
   // NAME=VALUE overrides of slam::TrackerOptions (slam/tracker_option_overrides.h).
   std::vector<std::string> tracker_options;
+  // NAME=VALUE overrides of the mutual loop's seg::RefinerOptions
+  // (seg/refiner_option_overrides.h); only where the loop runs (RunsMutualLoop).
+  std::vector<std::string> refiner_options;
   // Called after each frame with the pass's name, (done, total); may throw to cancel.
   std::function<void(const std::string&, int, int)> on_frame;
 };
@@ -58,9 +61,14 @@ bool IsTwoPassDataset(const std::filesystem::path& dataset);
 // The mutual loop runs (and refines masks) in mutual mode with a segmenter or external masks.
 bool RunsMutualLoop(const DatasetRunOptions& options);
 
+// Throws segslam::Error on bad options (a mode that does not exist, an unknown tracker
+// option, --segmenter with external masks, refiner options where no loop runs or out of
+// range), so a command can refuse them before it prints or reads anything.
+void CheckDatasetRunOptions(const DatasetRunOptions& options);
+
 // Runs every pass and writes the outputs above under `out_dir`. Throws segslam::Error on
-// bad options (a mode that does not exist, --segmenter with external masks, --map-in on
-// a two-pass dataset) before anything is written, and on unreadable input naming the file.
+// bad options (CheckDatasetRunOptions, and --map-in on a two-pass dataset) before
+// anything is written, and on unreadable input naming the file.
 std::vector<PassRun> RunDataset(const std::filesystem::path& dataset, const std::filesystem::path& out_dir,
                                 const DatasetRunOptions& options);
 

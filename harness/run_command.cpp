@@ -21,7 +21,6 @@
 #include "harness/slam_runner.h"
 #include "harness/trajectory_metrics.h"
 #include "seg/simulated_segmenter.h"
-#include "slam/tracker_option_overrides.h"
 
 namespace segslam::harness {
 
@@ -42,6 +41,7 @@ struct RunArgs {
   std::string camera_file;
   int frames = 0;
   std::vector<std::string> tracker_options;  // NAME=VALUE overrides of slam::TrackerOptions
+  std::vector<std::string> refiner_options;  // NAME=VALUE overrides of seg::RefinerOptions
   bool quiet = false;
 };
 
@@ -105,24 +105,6 @@ void PrintLoopSegmentation(const std::vector<PassRun>& passes) {
 }
 
 int RunRun(const RunArgs& args) {
-  slam::ParseSlamMode(args.mode);  // a bad mode fails before anything is read or written
-  slam::TrackerOptions checked;
-  for (const std::string& assignment : args.tracker_options) slam::SetTrackerOption(&checked, assignment);
-  if (!args.segmenter.empty() && args.masks != "gt") {
-    throw Error("run: --segmenter " + args.segmenter + " and --masks " + args.masks + " exclude each other");
-  }
-  if (args.strength != 1.0 && args.segmenter.empty()) {
-    throw Error("run: --strength scales the simulated segmenter's errors: give --segmenter too");
-  }
-  const fs::path dataset(args.dataset);
-  const fs::path out_dir = args.out_dir.empty() ? dataset / ("run_" + args.mode) : fs::path(args.out_dir);
-  const std::string simulated =
-      fmt::format("simulated {} (seed {})", SimulatedSegmenterLabel(args.segmenter, args.strength), args.seed);
-  const std::string masks = args.mode == "plain"        ? "none"
-                            : !args.segmenter.empty()   ? simulated
-                                                        : args.masks;
-  fmt::print("segslam run: mode {}, masks {}{}\n", args.mode, masks,
-             args.mode == "mutual" && masks != "gt" ? ", refined in the loop" : "");
   DatasetRunOptions options;
   options.mode = args.mode;
   options.masks = args.masks;
@@ -134,6 +116,21 @@ int RunRun(const RunArgs& args) {
   options.camera_file = args.camera_file;
   options.frames = args.frames;
   options.tracker_options = args.tracker_options;
+  options.refiner_options = args.refiner_options;
+  CheckDatasetRunOptions(options);  // before anything is printed, read or written
+  if (args.strength != 1.0 && args.segmenter.empty()) {
+    throw Error("run: --strength scales the simulated segmenter's errors: give --segmenter too");
+  }
+  const fs::path dataset(args.dataset);
+  const fs::path out_dir = args.out_dir.empty() ? dataset / ("run_" + args.mode) : fs::path(args.out_dir);
+  const std::string simulated =
+      fmt::format("simulated {} (seed {})", SimulatedSegmenterLabel(args.segmenter, args.strength), args.seed);
+  const std::string masks = args.mode == "plain"        ? "none"
+                            : !args.segmenter.empty()   ? simulated
+                                                        : args.masks;
+  fmt::print("segslam run: mode {}, masks {}{}{}\n", args.mode, masks,
+             RunsMutualLoop(options) ? ", refined in the loop" : "",
+             args.refiner_options.empty() ? "" : " with " + fmt::format("{}", fmt::join(args.refiner_options, " ")));
   // One progress bar per pass; each pass's rate counts from the end of the previous one.
   std::optional<ProgressBar> bar;
   std::string bar_pass;
@@ -193,6 +190,8 @@ void AddRunCommand(CLI::App& app, std::function<int()>* action) {
                   "camera.yaml to use instead of the sequence's own (for a real sequence without one)");
   cmd->add_option("--tracker", args->tracker_options,
                   "Override a tracker option, NAME=VALUE (repeatable; see slam/tracker.h)");
+  cmd->add_option("--refiner", args->refiner_options,
+                  "Override a refinement option of the mutual loop, NAME=VALUE (repeatable; see seg/refiner.h)");
   cmd->add_flag("-q,--quiet", args->quiet, "No progress bar");
   cmd->callback([args, action] { *action = [args] { return RunRun(*args); }; });
 }

@@ -149,6 +149,7 @@ class RepeatRunner {
     if (run.mode != "plain" && bench_.segmenter != "gt") options.segmenter = bench_.segmenter;
     options.seed = run.seed;
     options.strength = bench_.segmenter_strength;
+    if (run.mode == "mutual" && !options.segmenter.empty()) options.refiner_options = bench_.refiner;
     std::optional<ProgressBar> bar;  // this run's, with one job
     std::string bar_pass;
     int pass1_frames = 0;

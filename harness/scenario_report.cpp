@@ -22,6 +22,7 @@
 #include "harness/trajectory_metrics.h"
 #include "seg/external_masks.h"
 #include "seg/metrics.h"
+#include "seg/refiner_option_overrides.h"
 #include "seg/simulated_segmenter.h"
 
 namespace segslam::harness {
@@ -398,6 +399,7 @@ void DrawFeatureFigure(const ScenarioReport& report, const RepeatRun& run, const
   if (report.bench.segmenter != "gt") options.segmenter = report.bench.segmenter;
   options.segmenter_seed = run.seed;
   options.segmenter_strength = report.bench.segmenter_strength;
+  if (!options.segmenter.empty()) options.refiner = report.bench.LoopRefinerOptions();
   options.max_frames = FramesRun(sequence, report);
   options.tracker.record_features = true;
   const SlamRunResult rerun = RunSlamOnSequence(sequence, options);
@@ -440,9 +442,12 @@ BenchSettings BenchSettings::FromYaml(const YAML::Node& bench, const std::string
         settings.segmenter_strength = value.as<double>();
       } else if (key == "seed") {
         settings.seed = value.as<std::uint64_t>();
+      } else if (key == "refiner") {
+        if (!value.IsMap()) throw Error(origin + ": bench.refiner: expected a mapping of option: value");
+        for (const auto& option : value) settings.refiner.push_back(option.first.Scalar() + "=" + option.second.Scalar());
       } else {
         throw Error(origin + ": unknown key 'bench." + key +
-                    "' (known: modes, repeats, segmenter, segmenter_strength, seed)");
+                    "' (known: modes, repeats, segmenter, segmenter_strength, seed, refiner)");
       }
     } catch (const YAML::Exception& e) {
       throw Error(origin + ": bench." + key + ": " + e.msg);
@@ -471,7 +476,22 @@ std::string BenchSettings::Check() const {
   if (segmenter == "gt" && segmenter_strength != 1.0) {
     return "segmenter_strength: scales a simulated segmenter's errors; ground-truth masks (gt) have none";
   }
+  if (!refiner.empty()) {
+    if (segmenter == "gt") return "refiner: the mutual loop refines a simulated segmenter's masks; ground-truth masks (gt) are not refined";
+    try {
+      std::string problem;
+      if (!LoopRefinerOptions().IsValid(&problem)) return "refiner: " + problem;
+    } catch (const Error& e) {
+      return std::string("refiner: ") + e.what();
+    }
+  }
   return "";
+}
+
+seg::RefinerOptions BenchSettings::LoopRefinerOptions() const {
+  seg::RefinerOptions options;
+  for (const std::string& assignment : refiner) seg::SetRefinerOption(&options, assignment);
+  return options;
 }
 
 std::string BenchSettings::SegmenterLabel() const {
@@ -638,7 +658,7 @@ nlohmann::json ScenarioReport::ToJson() const {
       {"frames_per_pass", frames_per_pass},
       {"bench",
        {{"modes", bench.modes}, {"repeats", bench.repeats}, {"segmenter", bench.segmenter},
-        {"segmenter_strength", bench.segmenter_strength}, {"seed", bench.seed}}},
+        {"segmenter_strength", bench.segmenter_strength}, {"seed", bench.seed}, {"refiner", bench.refiner}}},
       {"seconds", seconds},
       {"runs", nlohmann::json::array()},
       {"summary", nlohmann::json::object()},
@@ -683,6 +703,7 @@ ReportDocument ScenarioReport::ToDocument() const {
                                             "ran once",
                                             Join(bench.modes, ", "), bench.repeats, bench.SegmenterLabel(), bench.seed,
                                             bench.seed + static_cast<std::uint64_t>(bench.repeats) - 1));
+  if (!bench.refiner.empty()) document.AddMetadata("refiner", "the mutual loop's, with " + Join(bench.refiner, " "));
   document.AddMetadata("result", fmt::format("{} in {:.1f} s", StatusLine(*this), seconds));
   for (const Table& table : ReportTables(*this)) {
     document.AddHeading(table.title, 3);

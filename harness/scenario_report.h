@@ -27,6 +27,7 @@
 
 #include "harness/report_document.h"
 #include "harness/run_evaluation.h"
+#include "seg/refiner.h"
 #include "slam/tracker.h"
 
 namespace segslam::harness {
@@ -42,6 +43,10 @@ struct BenchSettings {
   // twice as bad; a sweep axis for segmentation error strength. [0, 10].
   double segmenter_strength = 1.0;
   std::uint64_t seed = 1;  // repeat r (0-based) uses seed + r
+  // "name=value" overrides of the mutual loop's refinement (seg/refiner_option_overrides.h),
+  // from `refiner: {name: value, ...}`; a sweep axis as bench.refiner.NAME. Only the loop
+  // refines, so they need a simulated segmenter.
+  std::vector<std::string> refiner;
 
   // Throws segslam::Error naming `origin` and the key on unknown keys or bad values.
   static BenchSettings FromYaml(const YAML::Node& bench, const std::string& origin);
@@ -51,6 +56,8 @@ struct BenchSettings {
   bool ModeIsDeterministic(const std::string& mode) const;
   // The segmenter as reports name it: "gt", "fcis-like", "fcis-like@2".
   std::string SegmenterLabel() const;
+  // The refinement options of the mutual loop: the defaults with `refiner` set.
+  seg::RefinerOptions LoopRefinerOptions() const;
 };
 
 struct MetricName {

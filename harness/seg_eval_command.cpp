@@ -3,7 +3,6 @@
 // paper's Tables II and IV, with overlay pictures of the last frame (its Fig. 5).
 #include "core/atomic_file.h"
 #include "core/error.h"
-#include "core/option_assignment.h"
 #include "core/image_io.h"
 #include "core/instances.h"
 #include "core/tracks.h"
@@ -15,6 +14,7 @@
 #include "seg/external_masks.h"
 #include "seg/metrics.h"
 #include "seg/refiner.h"
+#include "seg/refiner_option_overrides.h"
 #include "seg/sequence_evaluation.h"
 #include "seg/simulated_segmenter.h"
 
@@ -24,7 +24,6 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
-#include <map>
 #include <memory>
 #include <optional>
 
@@ -57,55 +56,6 @@ std::vector<fs::path> SequencesOf(const fs::path& dataset) {
   return sequences;
 }
 
-// Sets one refiner option from "name=value" (seg-eval --refiner, for tuning). Throws
-// segslam::Error on an unknown name or a malformed value.
-void SetRefinerOption(seg::RefinerOptions* o, const std::string& assignment) {
-  const NumericAssignment parsed = ParseNumericAssignment(assignment, "seg-eval --refiner");
-  const std::string& name = parsed.name;
-  const double x = parsed.value;
-  const std::map<std::string, double*> doubles = {
-      {"w_barycenter", &o->w_barycenter},
-      {"w_shape", &o->w_shape},
-      {"max_match_cost", &o->max_match_cost},
-      {"splat_footprint_scale", &o->splat_footprint_scale},
-      {"depth_tolerance", &o->depth_tolerance},
-      {"occlusion_tolerance", &o->occlusion_tolerance},
-      {"min_depth_m", &o->min_depth_m},
-      {"repair_min_current_inside", &o->repair_min_current_inside},
-      {"repair_max_projected_covered", &o->repair_max_projected_covered},
-      {"added_score_decay", &o->added_score_decay},
-      {"min_added_score", &o->min_added_score},
-      {"replace_min_ratio_gap", &o->replace_min_ratio_gap},
-      {"new_region_score_factor", &o->new_region_score_factor},
-      {"min_new_region_score", &o->min_new_region_score},
-      {"matched_previous_score_weight", &o->matched_previous_score_weight},
-  };
-  const std::map<std::string, int*> ints = {
-      {"hole_fill_iterations", &o->hole_fill_iterations},
-      {"min_projected_area_px", &o->min_projected_area_px},
-      {"min_matched_area_px", &o->min_matched_area_px},
-      {"boundary_tolerance_px", &o->boundary_tolerance_px},
-  };
-  const std::map<std::string, bool*> bools = {
-      {"require_same_category", &o->require_same_category},
-      {"fill_missing_depth_with_median", &o->fill_missing_depth_with_median},
-      {"repair_missing_parts", &o->repair_missing_parts},
-      {"trim_instead_of_replace", &o->trim_instead_of_replace},
-      {"trim_keeps_region_depth", &o->trim_keeps_region_depth},
-  };
-  if (auto it = doubles.find(name); it != doubles.end()) {
-    *it->second = x;
-  } else if (auto it = ints.find(name); it != ints.end()) {
-    *it->second = static_cast<int>(x);
-  } else if (auto it = bools.find(name); it != bools.end()) {
-    *it->second = x != 0;
-  } else if (name == "add_unmatched") {
-    o->add_unmatched = static_cast<seg::AddUnmatchedRule>(static_cast<int>(x));
-  } else {
-    throw Error("seg-eval --refiner: unknown option " + name);
-  }
-}
-
 // Made when the first result is written, so that a refused dataset, mask folder or option
 // leaves no empty output folder behind.
 void CreateOutputFolder(const fs::path& out_dir) {
@@ -128,7 +78,7 @@ seg::SequenceSegEval EvaluateSequence(const SegEvalArgs& args, const fs::path& d
 
   seg::SegEvalOptions options;
   for (const std::string& assignment : args.refiner_options) {
-    SetRefinerOption(&options.refiner, assignment);
+    seg::SetRefinerOption(&options.refiner, assignment);
   }
   options.object_motion = args.object_motion;
   ProgressBar bar("seg-eval " + dir.filename().string());

@@ -1,7 +1,5 @@
 #include "slam/tracker_option_overrides.h"
 
-#include <algorithm>
-#include <cmath>
 #include <map>
 
 #include "core/error.h"
@@ -11,22 +9,17 @@ namespace segslam::slam {
 
 namespace {
 
-// Every overridable field as a setter from a number; one table serves both functions.
-using Setter = void (*)(TrackerOptions*, double);
+// Every overridable field as a setter from the parsed assignment; one table serves both
+// functions.
+using Setter = void (*)(TrackerOptions*, const NumericAssignment&);
+constexpr const char* kWhat = "tracker option";
 
-int WholeNumber(const char* name, double value) {
-  if (value != std::floor(value)) throw Error(std::string("tracker option ") + name + ": not a whole number");
-  return static_cast<int>(value);
-}
-
-bool ZeroOrOne(const char* name, double value) {
-  if (value != 0 && value != 1) throw Error(std::string("tracker option ") + name + ": expected 0 or 1");
-  return value == 1;
-}
-
-#define SEGSLAM_REAL(field) {#field, [](TrackerOptions* o, double v) { o->field = static_cast<decltype(o->field)>(v); }}
-#define SEGSLAM_INT(field) {#field, [](TrackerOptions* o, double v) { o->field = WholeNumber(#field, v); }}
-#define SEGSLAM_BOOL(field) {#field, [](TrackerOptions* o, double v) { o->field = ZeroOrOne(#field, v); }}
+#define SEGSLAM_REAL(field) \
+  {#field, [](TrackerOptions* o, const NumericAssignment& a) { o->field = static_cast<decltype(o->field)>(a.value); }}
+#define SEGSLAM_INT(field) \
+  {#field, [](TrackerOptions* o, const NumericAssignment& a) { o->field = WholeNumberValue(a, kWhat); }}
+#define SEGSLAM_BOOL(field) \
+  {#field, [](TrackerOptions* o, const NumericAssignment& a) { o->field = ZeroOrOneValue(a, kWhat); }}
 
 const std::map<std::string, Setter>& Setters() {
   static const std::map<std::string, Setter> setters = {
@@ -77,14 +70,14 @@ const std::map<std::string, Setter>& Setters() {
 }  // namespace
 
 void SetTrackerOption(TrackerOptions* options, const std::string& assignment) {
-  const NumericAssignment parsed = ParseNumericAssignment(assignment, "tracker option");
+  const NumericAssignment parsed = ParseNumericAssignment(assignment, kWhat);
   const auto setter = Setters().find(parsed.name);
   if (setter == Setters().end()) {
     std::string known;
     for (const std::string& n : TrackerOptionNames()) known += (known.empty() ? "" : ", ") + n;
     throw Error("tracker option: unknown field '" + parsed.name + "' (known: " + known + ")");
   }
-  setter->second(options, parsed.value);
+  setter->second(options, parsed);
 }
 
 std::vector<std::string> TrackerOptionNames() {

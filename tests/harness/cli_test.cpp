@@ -226,3 +226,14 @@ TEST_F(CliRunBadInputTest, StrengthWithoutASimulatedSegmenterIsRefused) {
   EXPECT_NE(out_of_range.stderr_text.find("--strength: Value 12 not in range"), std::string::npos)
       << out_of_range.stderr_text;
 }
+
+// --refiner tunes the mutual loop's refinement: where no loop runs it would do nothing.
+TEST_F(CliRunBadInputTest, RefinerOptionsOutsideTheLoopOrOutOfRangeAreRefused) {
+  const fs::path sequence = GenerateTinySequence();
+  ExpectRunFails(sequence.string() + " --mode plain --refiner depth_tolerance=0.1", "--refiner applies to the mutual loop");
+  ExpectRunFails(sequence.string() + " --mode mutual --refiner depth_tolerance=0.1", "--refiner applies to the mutual loop");
+  ExpectRunFails(sequence.string() + " --mode mutual --segmenter fcis-like --refiner depth_tolerance=2",
+                 "depth_tolerance must lie in [0, 1)");
+  ExpectRunFails(sequence.string() + " --mode mutual --segmenter fcis-like --refiner depth_tol=0.1",
+                 "unknown field 'depth_tol'");
+}

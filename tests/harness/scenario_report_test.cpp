@@ -121,5 +121,35 @@ TEST(ScenarioReportTest, SegmenterStrengthScalesOnlyASimulatedSegmenter) {
   }
 }
 
+// bench.refiner tunes the mutual loop's refinement (a sweep axis as bench.refiner.NAME).
+TEST(ScenarioReportTest, RefinerOptionsNeedASimulatedSegmenterAndValidValues) {
+  const BenchSettings bench = BenchSettings::FromYaml(
+      YAML::Load("{segmenter: fcis-like, refiner: {trim_keeps_region_depth: 1, depth_tolerance: 0.1}}"), "s.yaml");
+  EXPECT_EQ(bench.refiner, (std::vector<std::string>{"trim_keeps_region_depth=1", "depth_tolerance=0.1"}));
+  const seg::RefinerOptions options = bench.LoopRefinerOptions();
+  EXPECT_TRUE(options.trim_keeps_region_depth);
+  EXPECT_DOUBLE_EQ(options.depth_tolerance, 0.1);
+  EXPECT_EQ(BenchSettings().LoopRefinerOptions().trim_keeps_region_depth, seg::RefinerOptions().trim_keeps_region_depth);
+  const struct {
+    const char* yaml;
+    const char* fragment;
+  } bad[] = {
+      {"{segmenter: gt, refiner: {depth_tolerance: 0.1}}", "ground-truth masks (gt) are not refined"},
+      {"{refiner: {depth_tol: 0.1}}", "unknown field 'depth_tol'"},
+      {"{refiner: {depth_tolerance: 2}}", "depth_tolerance must lie in [0, 1)"},
+      {"{refiner: {trim_keeps_region_depth: yes}}", "not a number: 'yes'"},
+      {"{refiner: [depth_tolerance]}", "expected a mapping"},
+  };
+  for (const auto& c : bad) {
+    try {
+      BenchSettings::FromYaml(YAML::Load(c.yaml), "s.yaml");
+      ADD_FAILURE() << c.yaml << ": accepted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("s.yaml"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(c.fragment), std::string::npos) << e.what();
+    }
+  }
+}
+
 }  // namespace
 }  // namespace segslam::harness

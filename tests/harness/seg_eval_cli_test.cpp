@@ -158,7 +158,7 @@ TEST_F(SegEvalCliTest, RefusedInputIsNamedAndLeavesNoOutputFolder) {
     std::string arguments, message;
   } cases[] = {
       {"--poses slam", "only 'gt' is available"},
-      {"--refiner no_such_option=1", "unknown option no_such_option"},
+      {"--refiner no_such_option=1", "unknown field 'no_such_option'"},
       {"--refiner w_shape=abc", "not a number: 'abc'"},
       {"--segmenter no-such-preset", "unknown simulated segmenter preset 'no-such-preset'"},
       {"--masks " + (dir_ / "missing").string(), "external masks folder does not exist"},

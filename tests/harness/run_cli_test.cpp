@@ -1,0 +1,46 @@
+// `segslam run`'s options that tune the mutual loop, on the generated office fixture.
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <string>
+
+#include "tests/harness/cli_runner.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using segslam::testing::CommandOutput;
+using segslam::testing::ReadText;
+
+const fs::path kDataDir = SEGSLAM_TEST_DATA_DIR;
+
+class RunCliTest : public segslam::testing::CliScratchTest {
+ protected:
+  RunCliTest() : CliScratchTest("segslam_run_") {}
+
+  nlohmann::json RunLoopAndReadSegJson(const std::string& extra, const fs::path& out_dir) {
+    const fs::path sequence = kDataDir / "office_seg" / "pass1";
+    EXPECT_TRUE(fs::is_directory(sequence)) << sequence << " missing: ctest's sim_datasets fixture makes it";
+    last_ = Run("run " + sequence.string() + " --mode mutual --segmenter fcis-like --seed 2 --frames 20 -q --out " +
+                out_dir.string() + " " + extra);
+    EXPECT_EQ(last_.exit_code, 0) << last_.stderr_text;
+    return nlohmann::json::parse(ReadText(out_dir / "seg.json"));
+  }
+  CommandOutput last_;
+};
+
+// The default refinement adds the projection of an instance the segmenter missed;
+// add_unmatched=0 (never) must reach the loop and add none, the raw masks unchanged.
+TEST_F(RunCliTest, RefinerOptionsReachTheLoop) {
+  const nlohmann::json by_default = RunLoopAndReadSegJson("", dir_ / "default");
+  EXPECT_EQ(last_.stdout_text.find("with add_unmatched"), std::string::npos);
+  const nlohmann::json never_added = RunLoopAndReadSegJson("--refiner add_unmatched=0", dir_ / "never_added");
+  EXPECT_NE(last_.stdout_text.find("refined in the loop with add_unmatched=0"), std::string::npos) << last_.stdout_text;
+  EXPECT_GT(by_default["decisions"]["added"].get<int>(), 0);
+  EXPECT_EQ(never_added["decisions"]["added"].get<int>(), 0);
+  EXPECT_EQ(never_added["raw"], by_default["raw"]);
+  EXPECT_EQ(never_added["frames"], by_default["frames"]);
+}
+
+}  // namespace
