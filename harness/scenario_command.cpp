@@ -150,6 +150,7 @@ class RepeatRunner {
     options.seed = run.seed;
     options.strength = bench_.segmenter_strength;
     if (run.mode == "mutual" && !options.segmenter.empty()) options.refiner_options = bench_.refiner;
+    options.tracker_options = bench_.tracker;
     std::optional<ProgressBar> bar;  // this run's, with one job
     std::string bar_pass;
     int pass1_frames = 0;

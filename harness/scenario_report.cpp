@@ -24,6 +24,7 @@
 #include "seg/metrics.h"
 #include "seg/refiner_option_overrides.h"
 #include "seg/simulated_segmenter.h"
+#include "slam/tracker_option_overrides.h"
 
 namespace segslam::harness {
 
@@ -401,6 +402,7 @@ void DrawFeatureFigure(const ScenarioReport& report, const RepeatRun& run, const
   options.segmenter_strength = report.bench.segmenter_strength;
   if (!options.segmenter.empty()) options.refiner = report.bench.LoopRefinerOptions();
   options.max_frames = FramesRun(sequence, report);
+  options.tracker = report.bench.TrackerOverrides();
   options.tracker.record_features = true;
   const SlamRunResult rerun = RunSlamOnSequence(sequence, options);
   const std::optional<std::size_t> chosen = PickFeatureFigureFrame(rerun.frames);
@@ -420,6 +422,24 @@ void DrawFeatureFigure(const ScenarioReport& report, const RepeatRun& run, const
 std::string StatusLine(const ScenarioReport& report) {
   const auto passed = std::count_if(report.checks.begin(), report.checks.end(), [](const auto& c) { return c.passed; });
   return fmt::format("{} of {} expectations passed", passed, report.checks.size());
+}
+
+// "name=value" for each leaf of a mapping of options. Nested mappings join their keys
+// with '.', so `orb: {max_features: 1500}` (what --set bench.tracker.orb.max_features
+// writes) and `orb.max_features: 1500` say the same.
+void AppendOptionAssignments(const YAML::Node& options, const std::string& prefix, const std::string& where,
+                             std::vector<std::string>* assignments) {
+  if (!options.IsMap()) throw Error(where + ": expected a mapping of option: value");
+  for (const auto& option : options) {
+    const std::string name = prefix + option.first.Scalar();
+    if (option.second.IsMap()) {
+      AppendOptionAssignments(option.second, name + ".", where, assignments);
+    } else if (option.second.IsScalar()) {
+      assignments->push_back(name + "=" + option.second.Scalar());
+    } else {
+      throw Error(where + ": " + name + ": expected a number");
+    }
+  }
 }
 
 }  // namespace
@@ -443,11 +463,12 @@ BenchSettings BenchSettings::FromYaml(const YAML::Node& bench, const std::string
       } else if (key == "seed") {
         settings.seed = value.as<std::uint64_t>();
       } else if (key == "refiner") {
-        if (!value.IsMap()) throw Error(origin + ": bench.refiner: expected a mapping of option: value");
-        for (const auto& option : value) settings.refiner.push_back(option.first.Scalar() + "=" + option.second.Scalar());
+        AppendOptionAssignments(value, "", origin + ": bench.refiner", &settings.refiner);
+      } else if (key == "tracker") {
+        AppendOptionAssignments(value, "", origin + ": bench.tracker", &settings.tracker);
       } else {
         throw Error(origin + ": unknown key 'bench." + key +
-                    "' (known: modes, repeats, segmenter, segmenter_strength, seed, refiner)");
+                    "' (known: modes, repeats, segmenter, segmenter_strength, seed, refiner, tracker)");
       }
     } catch (const YAML::Exception& e) {
       throw Error(origin + ": bench." + key + ": " + e.msg);
@@ -485,7 +506,18 @@ std::string BenchSettings::Check() const {
       return std::string("refiner: ") + e.what();
     }
   }
+  try {
+    TrackerOverrides();
+  } catch (const Error& e) {
+    return std::string("tracker: ") + e.what();
+  }
   return "";
+}
+
+slam::TrackerOptions BenchSettings::TrackerOverrides() const {
+  slam::TrackerOptions options;
+  for (const std::string& assignment : tracker) slam::SetTrackerOption(&options, assignment);
+  return options;
 }
 
 seg::RefinerOptions BenchSettings::LoopRefinerOptions() const {
@@ -658,7 +690,8 @@ nlohmann::json ScenarioReport::ToJson() const {
       {"frames_per_pass", frames_per_pass},
       {"bench",
        {{"modes", bench.modes}, {"repeats", bench.repeats}, {"segmenter", bench.segmenter},
-        {"segmenter_strength", bench.segmenter_strength}, {"seed", bench.seed}, {"refiner", bench.refiner}}},
+        {"segmenter_strength", bench.segmenter_strength}, {"seed", bench.seed}, {"refiner", bench.refiner},
+        {"tracker", bench.tracker}}},
       {"seconds", seconds},
       {"runs", nlohmann::json::array()},
       {"summary", nlohmann::json::object()},
@@ -704,6 +737,7 @@ ReportDocument ScenarioReport::ToDocument() const {
                                             Join(bench.modes, ", "), bench.repeats, bench.SegmenterLabel(), bench.seed,
                                             bench.seed + static_cast<std::uint64_t>(bench.repeats) - 1));
   if (!bench.refiner.empty()) document.AddMetadata("refiner", "the mutual loop's, with " + Join(bench.refiner, " "));
+  if (!bench.tracker.empty()) document.AddMetadata("tracker", "every mode's, with " + Join(bench.tracker, " "));
   document.AddMetadata("result", fmt::format("{} in {:.1f} s", StatusLine(*this), seconds));
   for (const Table& table : ReportTables(*this)) {
     document.AddHeading(table.title, 3);

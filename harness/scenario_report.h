@@ -47,6 +47,10 @@ struct BenchSettings {
   // from `refiner: {name: value, ...}`; a sweep axis as bench.refiner.NAME. Only the loop
   // refines, so they need a simulated segmenter.
   std::vector<std::string> refiner;
+  // "name=value" overrides of the tracker (slam/tracker_option_overrides.h) in every
+  // mode, from `tracker: {name: value, ...}`; nested names as orb: {max_features: 1500}
+  // or orb.max_features. A sweep axis as bench.tracker.NAME.
+  std::vector<std::string> tracker;
 
   // Throws segslam::Error naming `origin` and the key on unknown keys or bad values.
   static BenchSettings FromYaml(const YAML::Node& bench, const std::string& origin);
@@ -58,6 +62,8 @@ struct BenchSettings {
   std::string SegmenterLabel() const;
   // The refinement options of the mutual loop: the defaults with `refiner` set.
   seg::RefinerOptions LoopRefinerOptions() const;
+  // The tracker's options: the defaults with `tracker` set.
+  slam::TrackerOptions TrackerOverrides() const;
 };
 
 struct MetricName {

@@ -151,5 +151,27 @@ TEST(ScenarioReportTest, RefinerOptionsNeedASimulatedSegmenterAndValidValues) {
   }
 }
 
+// bench.tracker sets the tracker's options in every mode; nested mappings are the dotted
+// names that --set bench.tracker.orb.max_features=1500 writes.
+TEST(ScenarioReportTest, TrackerOptionsTakeNestedNamesAndAreChecked) {
+  const BenchSettings bench = BenchSettings::FromYaml(
+      YAML::Load("{segmenter: gt, tracker: {orb: {max_features: 1500}, min_tracking_inliers: 40}}"), "s.yaml");
+  EXPECT_EQ(bench.tracker, (std::vector<std::string>{"orb.max_features=1500", "min_tracking_inliers=40"}));
+  const slam::TrackerOptions options = bench.TrackerOverrides();
+  EXPECT_EQ(options.orb.max_features, 1500);
+  EXPECT_EQ(options.min_tracking_inliers, 40);
+  EXPECT_EQ(options.local_bundle_adjustment, slam::TrackerOptions().local_bundle_adjustment);
+  for (const char* bad : {"{tracker: {orb: {max_feature: 1500}}}", "{tracker: {local_bundle_adjustment: 2}}",
+                          "{tracker: {min_tracking_inliers: [40]}}", "{tracker: 40}"}) {
+    try {
+      BenchSettings::FromYaml(YAML::Load(bad), "s.yaml");
+      ADD_FAILURE() << bad << ": accepted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("s.yaml: bench"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("tracker"), std::string::npos) << e.what();
+    }
+  }
+}
+
 }  // namespace
 }  // namespace segslam::harness

@@ -302,7 +302,9 @@ TEST_F(SweepCliTest, BadInputIsOneLineBeforeAnyWork) {
        {"sweep " + kSmallOffice + " --set office.people_walking" + out,
         "sweep " + kSmallOffice + " --set office.walkers=1,2" + out,
         "sweep " + kSmallOffice + " --set office.people_walking=1,-3" + out,
-        "sweep " + kSmallOffice + " --set office.people_walking=1,2 --shard 3/2" + out}) {
+        "sweep " + kSmallOffice + " --set office.people_walking=1,2 --shard 3/2" + out,
+        "sweep " + kSmallOffice + " --set bench.tracker.orb.max_feature=500,1000" + out,
+        "sweep " + kSmallOffice + " --set bench.refiner.trim_keeps_region_depth=0,2" + out}) {
     const CommandOutput result = Run(arguments);
     EXPECT_EQ(result.exit_code, 1) << arguments;
     EXPECT_EQ(LineCount(result.stderr_text), 1) << arguments << "\n" << result.stderr_text;
