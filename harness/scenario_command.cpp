@@ -242,7 +242,10 @@ BenchSettings EffectiveBench(const scenes::Scenario& scenario, const ScenarioRun
   if (request.repeats > 0) bench.repeats = request.repeats;
   if (!request.segmenter.empty()) {
     bench.segmenter = request.segmenter;
-    if (bench.segmenter == "gt") bench.segmenter_strength = 1.0;
+    if (bench.segmenter == "gt") {  // nothing to scale or refine: the file's settings for its segmenter go
+      bench.segmenter_strength = 1.0;
+      bench.refiner.clear();
+    }
   }
   if (const std::string problem = bench.Check(); !problem.empty()) throw Error("scenario run: " + problem);
   return bench;

@@ -28,7 +28,8 @@ struct ScenarioRunRequest {
 
 // The bench settings a run of `scenario` (overrides applied) uses: its bench: section with
 // the request's modes, repeats and segmenter laid over it. --segmenter gt sets the
-// segmenter strength back to 1 (ground truth has no errors to scale). Throws
+// segmenter strength back to 1 and drops the refiner options (ground truth has no errors
+// to scale, and is not refined). Throws
 // segslam::Error naming the scenario file on bad settings.
 BenchSettings EffectiveBench(const scenes::Scenario& scenario, const ScenarioRunRequest& request);
 

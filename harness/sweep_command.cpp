@@ -72,6 +72,9 @@ void CheckEveryPoint(const scenes::Scenario& base, const SweepGrid& grid, const 
         if (axis.key == "bench.segmenter_strength" && bench.segmenter == "gt") {
           throw Error("sweep: bench.segmenter_strength scales a simulated segmenter's errors; the segmenter is gt");
         }
+        if (axis.key.rfind("bench.refiner.", 0) == 0 && bench.segmenter == "gt") {
+          throw Error("sweep: " + axis.key + " tunes the refinement of a simulated segmenter's masks; the segmenter is gt");
+        }
       }
     } catch (const Error& e) {
       if (sweep_file.empty()) throw;

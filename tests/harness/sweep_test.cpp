@@ -183,6 +183,24 @@ TEST(ShippedSweepFilesTest, EveryPointIsAValidRun) {
   EXPECT_GE(files, 3);
 }
 
+// --segmenter gt replaces the file's simulated segmenter: its strength and refinement
+// options have nothing left to act on, so they are dropped rather than refused.
+TEST(EffectiveBenchTest, GroundTruthMasksDropTheSegmentersStrengthAndRefinerOptions) {
+  scenes::Scenario scenario = scenes::LoadScenario(fs::path(SEGSLAM_SOURCE_DIR) / "scenarios" / "test" / "office_small.yaml");
+  scenes::ApplyOverrides(scenario, {"bench.segmenter_strength=2", "bench.refiner.trim_keeps_region_depth=1",
+                                    "bench.tracker.min_tracking_inliers=40"});
+  ScenarioRunRequest request;
+  request.scenario_file = "office_small.yaml";
+  const BenchSettings as_written = EffectiveBench(scenario, request);
+  EXPECT_EQ(as_written.refiner, std::vector<std::string>{"trim_keeps_region_depth=1"});
+  EXPECT_EQ(as_written.segmenter_strength, 2.0);
+  request.segmenter = "gt";
+  const BenchSettings with_gt = EffectiveBench(scenario, request);
+  EXPECT_TRUE(with_gt.refiner.empty());
+  EXPECT_EQ(with_gt.segmenter_strength, 1.0);
+  EXPECT_EQ(with_gt.tracker, std::vector<std::string>{"min_tracking_inliers=40"});  // the tracker runs in every mode
+}
+
 TEST(SweepShardTest, ShardsCoverEveryPointExactlyOnce) {
   for (int n = 1; n <= 4; ++n) {
     for (int p = 0; p < 11; ++p) {
@@ -298,16 +316,23 @@ TEST_F(SweepCliTest, SweepFileOverSegmentationErrorStrength) {
 
 TEST_F(SweepCliTest, BadInputIsOneLineBeforeAnyWork) {
   const std::string out = " --out " + (dir_ / "out").string() + " --cache " + (dir_ / "cache").string() + " -q";
-  for (const std::string& arguments :
-       {"sweep " + kSmallOffice + " --set office.people_walking" + out,
-        "sweep " + kSmallOffice + " --set office.walkers=1,2" + out,
-        "sweep " + kSmallOffice + " --set office.people_walking=1,-3" + out,
-        "sweep " + kSmallOffice + " --set office.people_walking=1,2 --shard 3/2" + out,
-        "sweep " + kSmallOffice + " --set bench.tracker.orb.max_feature=500,1000" + out,
-        "sweep " + kSmallOffice + " --set bench.refiner.trim_keeps_region_depth=0,2" + out}) {
+  const struct {
+    std::string arguments, message;
+  } cases[] = {
+      {"--set office.people_walking", "expected KEY=VALUE"},
+      {"--set office.walkers=1,2", "office.walkers"},
+      {"--set office.people_walking=1,-3", "people_walking"},
+      {"--set office.people_walking=1,2 --shard 3/2", "--shard"},
+      {"--set bench.tracker.orb.max_feature=500,1000", "unknown field 'orb.max_feature'"},
+      {"--set bench.refiner.trim_keeps_region_depth=0,2", "trim_keeps_region_depth: expected 0 or 1"},
+      {"--set bench.refiner.trim_keeps_region_depth=0,1 --segmenter gt", "the segmenter is gt"},
+  };
+  for (const auto& c : cases) {
+    const std::string arguments = "sweep " + kSmallOffice + " " + c.arguments + out;
     const CommandOutput result = Run(arguments);
     EXPECT_EQ(result.exit_code, 1) << arguments;
     EXPECT_EQ(LineCount(result.stderr_text), 1) << arguments << "\n" << result.stderr_text;
+    EXPECT_NE(result.stderr_text.find(c.message), std::string::npos) << arguments << "\n" << result.stderr_text;
     EXPECT_FALSE(fs::exists(dir_ / "cache")) << arguments;
   }
 }
