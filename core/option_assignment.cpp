@@ -38,4 +38,10 @@ bool ZeroOrOneValue(const NumericAssignment& parsed, const std::string& what) {
   return parsed.value == 1;
 }
 
+void ThrowUnknownOption(const std::string& what, const std::string& name, const std::vector<std::string>& known) {
+  std::string list;
+  for (const std::string& field : known) list += (list.empty() ? "" : ", ") + field;
+  throw Error(what + ": unknown field '" + name + "' (known: " + list + ")");
+}
+
 }  // namespace segslam

@@ -1,7 +1,5 @@
 #include "seg/refiner_option_overrides.h"
 
-#include <map>
-
 #include "core/error.h"
 #include "core/option_assignment.h"
 
@@ -9,9 +7,6 @@ namespace segslam::seg {
 
 namespace {
 
-// Every overridable field as a setter from the parsed assignment; one table serves both
-// functions.
-using Setter = void (*)(RefinerOptions*, const NumericAssignment&);
 constexpr const char* kWhat = "refiner option";
 
 AddUnmatchedRule AddUnmatchedRuleValue(const NumericAssignment& parsed) {
@@ -29,8 +24,9 @@ AddUnmatchedRule AddUnmatchedRuleValue(const NumericAssignment& parsed) {
 #define SEGSLAM_BOOL(field) \
   {#field, [](RefinerOptions* o, const NumericAssignment& a) { o->field = ZeroOrOneValue(a, kWhat); }}
 
-const std::map<std::string, Setter>& Setters() {
-  static const std::map<std::string, Setter> setters = {
+// Every overridable field; one table serves both functions.
+const NamedOptionTable<RefinerOptions>& Table() {
+  static const NamedOptionTable<RefinerOptions> table(kWhat, {
       SEGSLAM_REAL(w_barycenter),
       SEGSLAM_REAL(w_shape),
       SEGSLAM_REAL(max_match_cost),
@@ -56,8 +52,8 @@ const std::map<std::string, Setter>& Setters() {
       SEGSLAM_REAL(matched_previous_score_weight),
       SEGSLAM_REAL(new_region_score_factor),
       SEGSLAM_REAL(min_new_region_score),
-  };
-  return setters;
+  });
+  return table;
 }
 
 #undef SEGSLAM_REAL
@@ -66,21 +62,8 @@ const std::map<std::string, Setter>& Setters() {
 
 }  // namespace
 
-void SetRefinerOption(RefinerOptions* options, const std::string& assignment) {
-  const NumericAssignment parsed = ParseNumericAssignment(assignment, kWhat);
-  const auto setter = Setters().find(parsed.name);
-  if (setter == Setters().end()) {
-    std::string known;
-    for (const std::string& n : RefinerOptionNames()) known += (known.empty() ? "" : ", ") + n;
-    throw Error(std::string(kWhat) + ": unknown field '" + parsed.name + "' (known: " + known + ")");
-  }
-  setter->second(options, parsed);
-}
+void SetRefinerOption(RefinerOptions* options, const std::string& assignment) { Table().Set(options, assignment); }
 
-std::vector<std::string> RefinerOptionNames() {
-  std::vector<std::string> names;
-  for (const auto& [name, setter] : Setters()) names.push_back(name);
-  return names;  // std::map keeps them sorted
-}
+std::vector<std::string> RefinerOptionNames() { return Table().Names(); }
 
 }  // namespace segslam::seg

@@ -365,21 +365,16 @@ std::map<std::string, int*> IntFields(SimulatedSegmenterOptions* o) {
 }  // namespace
 
 void SimulatedSegmenterOptions::Set(const std::string& assignment) {
-  const NumericAssignment parsed = ParseNumericAssignment(assignment, "segmenter option");
-  const std::string& name = parsed.name;
-  const std::string& text = parsed.text;
-  const double value = parsed.value;
+  const std::string what = "segmenter option";
+  const NumericAssignment parsed = ParseNumericAssignment(assignment, what);
   const auto doubles = DoubleFields(this);
   const auto ints = IntFields(this);
-  if (auto it = doubles.find(name); it != doubles.end()) {
-    *it->second = value;
-  } else if (auto it = ints.find(name); it != ints.end()) {
-    if (value != std::floor(value)) throw Error("segmenter option " + name + ": not a whole number: '" + text + "'");
-    *it->second = static_cast<int>(value);
+  if (auto it = doubles.find(parsed.name); it != doubles.end()) {
+    *it->second = parsed.value;
+  } else if (auto it = ints.find(parsed.name); it != ints.end()) {
+    *it->second = WholeNumberValue(parsed, what);
   } else {
-    std::string known;
-    for (const std::string& field : FieldNames()) known += (known.empty() ? "" : ", ") + field;
-    throw Error("segmenter option: unknown field '" + name + "' (known: " + known + ")");
+    ThrowUnknownOption(what, parsed.name, FieldNames());
   }
 }
 

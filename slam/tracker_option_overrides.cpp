@@ -1,17 +1,11 @@
 #include "slam/tracker_option_overrides.h"
 
-#include <map>
-
-#include "core/error.h"
 #include "core/option_assignment.h"
 
 namespace segslam::slam {
 
 namespace {
 
-// Every overridable field as a setter from the parsed assignment; one table serves both
-// functions.
-using Setter = void (*)(TrackerOptions*, const NumericAssignment&);
 constexpr const char* kWhat = "tracker option";
 
 #define SEGSLAM_REAL(field) \
@@ -21,8 +15,9 @@ constexpr const char* kWhat = "tracker option";
 #define SEGSLAM_BOOL(field) \
   {#field, [](TrackerOptions* o, const NumericAssignment& a) { o->field = ZeroOrOneValue(a, kWhat); }}
 
-const std::map<std::string, Setter>& Setters() {
-  static const std::map<std::string, Setter> setters = {
+// Every overridable field; one table serves both functions.
+const NamedOptionTable<TrackerOptions>& Table() {
+  static const NamedOptionTable<TrackerOptions> table(kWhat, {
       SEGSLAM_INT(orb.max_features),
       SEGSLAM_REAL(orb.scale_factor),
       SEGSLAM_INT(orb.levels),
@@ -59,8 +54,8 @@ const std::map<std::string, Setter>& Setters() {
       SEGSLAM_INT(min_initial_map_features),
       SEGSLAM_INT(reset_map_keyframes),
       SEGSLAM_REAL(reset_map_after_lost_s),
-  };
-  return setters;
+  });
+  return table;
 }
 
 #undef SEGSLAM_REAL
@@ -69,21 +64,8 @@ const std::map<std::string, Setter>& Setters() {
 
 }  // namespace
 
-void SetTrackerOption(TrackerOptions* options, const std::string& assignment) {
-  const NumericAssignment parsed = ParseNumericAssignment(assignment, kWhat);
-  const auto setter = Setters().find(parsed.name);
-  if (setter == Setters().end()) {
-    std::string known;
-    for (const std::string& n : TrackerOptionNames()) known += (known.empty() ? "" : ", ") + n;
-    throw Error("tracker option: unknown field '" + parsed.name + "' (known: " + known + ")");
-  }
-  setter->second(options, parsed);
-}
+void SetTrackerOption(TrackerOptions* options, const std::string& assignment) { Table().Set(options, assignment); }
 
-std::vector<std::string> TrackerOptionNames() {
-  std::vector<std::string> names;
-  for (const auto& [name, setter] : Setters()) names.push_back(name);
-  return names;  // std::map keeps them sorted
-}
+std::vector<std::string> TrackerOptionNames() { return Table().Names(); }
 
 }  // namespace segslam::slam
