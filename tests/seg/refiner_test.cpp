@@ -342,8 +342,8 @@ TEST(SegmentationRefinerTest, DefaultsKeepSlightlyLargerRegionsAndTrimGrossOnes)
   EXPECT_FLOAT_EQ(r.refined.instances[2].score, 0.5f);  // scores are the segmenter's
 }
 
-// trim_keeps_region_depth: person B twice as wide as its projection (gap ~0.5, trimmed by
-// default). Where the extra width has the person's depth, it grew (stepped in from behind
+// trim_keeps_region_depth (on by default): person B twice as wide as its projection (gap
+// ~0.5, so the trim rule fires). Where the extra width has the person's depth, it grew (stepped in from behind
 // something): kept whole. Where the extra width shows the wall 2 m behind, it is bleeding:
 // trimmed as without the option.
 TEST(SegmentationRefinerTest, TrimKeepsWhatLiesAtTheRegionsDepth) {
@@ -374,7 +374,9 @@ TEST(SegmentationRefinerTest, TrimKeepsWhatLiesAtTheRegionsDepth) {
   EXPECT_EQ(cut.decisions[2].kind, RegionDecision::Kind::kReplaced);
   EXPECT_LE(Differences(cut.refined.instances[2].mask, RectMask(trimmed_b)), 4);
   // Without the option the grown region is trimmed too: what the option changes.
-  const RefinementResult plain_trim = SegmentationRefiner().Refine(grown);
+  RefinerOptions without = options;
+  without.trim_keeps_region_depth = false;
+  const RefinementResult plain_trim = SegmentationRefiner(without).Refine(grown);
   EXPECT_LE(Differences(plain_trim.refined.instances[2].mask, RectMask(trimmed_b)), 4);
 }
 
