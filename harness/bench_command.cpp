@@ -10,7 +10,9 @@
 #include "harness/progress_bar.h"
 #include "harness/slam_runner.h"
 #include "slam/tracker.h"
+#include "slam/tracker_option_overrides.h"
 #include "scenes/scenario.h"
+#include "seg/refiner_option_overrides.h"
 #include "seg/simulated_segmenter.h"
 #include "sim/dataset_generator.h"
 
@@ -113,6 +115,8 @@ struct BenchSlamArgs {
   int frames = 0;
   std::string json_file;
   std::string camera_file;
+  std::vector<std::string> tracker_options;  // NAME=VALUE overrides of slam::TrackerOptions
+  std::vector<std::string> refiner_options;  // NAME=VALUE overrides of the loop's seg::RefinerOptions
 };
 
 struct TimeSummary {
@@ -133,9 +137,6 @@ TimeSummary Summarize(std::vector<double> values) {
 }
 
 int RunBenchSlam(const BenchSlamArgs& args) {
-  // One core, as ORB-SLAM2's tracking thread: OpenCV's own threads would flatter us.
-  cv::setNumThreads(1);
-  const TumSequence sequence = TumSequence::OpenWithCameraFile(args.sequence, args.camera_file);
   SlamRunOptions options;
   options.mode = slam::ParseSlamMode(args.mode);
   options.masks = args.masks;
@@ -143,6 +144,17 @@ int RunBenchSlam(const BenchSlamArgs& args) {
   options.segmenter_seed = args.seed;
   options.max_frames = args.frames;
   options.read_ahead = false;
+  for (const std::string& assignment : args.tracker_options) slam::SetTrackerOption(&options.tracker, assignment);
+  if (!args.refiner_options.empty()) {
+    if (options.mode != slam::SlamMode::kMutual || (args.segmenter.empty() && args.masks == "gt")) {
+      throw Error("bench slam: --refiner applies to the mutual loop: mode mutual with --segmenter or --masks");
+    }
+    for (const std::string& assignment : args.refiner_options) seg::SetRefinerOption(&options.refiner, assignment);
+    if (std::string problem; !options.refiner.IsValid(&problem)) throw Error("bench slam: --refiner: " + problem);
+  }
+  // One core, as ORB-SLAM2's tracking thread: OpenCV's own threads would flatter us.
+  cv::setNumThreads(1);
+  const TumSequence sequence = TumSequence::OpenWithCameraFile(args.sequence, args.camera_file);
   ProgressBar bar("bench slam " + args.mode);
   const auto start = std::chrono::steady_clock::now();
   options.on_frame = [&](int done, int total) {
@@ -171,10 +183,19 @@ int RunBenchSlam(const BenchSlamArgs& args) {
                                                                     : args.masks;
   fmt::print("sequence {} ({}x{}), mode {}, masks {}, {} frames, {} features requested, one core of {}\n",
              args.sequence, sequence.camera().intrinsics.width, sequence.camera().intrinsics.height, args.mode,
-             masks, run.frames.size(), slam::TrackerOptions().orb.max_features, MachineLine(machine));
+             masks, run.frames.size(), options.tracker.orb.max_features, MachineLine(machine));
+  for (const auto& [what, overrides] : {std::pair{"tracker", args.tracker_options}, {"refiner", args.refiner_options}}) {
+    if (!overrides.empty()) fmt::print("{} options: {}\n", what, fmt::join(overrides, " "));
+  }
   fmt::print("{:<26} {:>10} {:>10} {:>10}\n", "stage (ms per frame)", "median", "p90", "mean");
-  nlohmann::json json = {{"sequence", args.sequence},     {"mode", args.mode},    {"masks", masks},
-                         {"frames", run.frames.size()}, {"machine", machine}};
+  nlohmann::json json = {{"sequence", args.sequence},
+                         {"mode", args.mode},
+                         {"masks", masks},
+                         {"frames", run.frames.size()},
+                         {"features_requested", options.tracker.orb.max_features},
+                         {"tracker_options", args.tracker_options},
+                         {"refiner_options", args.refiner_options},
+                         {"machine", machine}};
   for (const auto& [name, values] : stages) {
     const TimeSummary s = Summarize(values);
     fmt::print("{:<26} {:>10.2f} {:>10.2f} {:>10.2f}\n", name, s.median, s.p90, s.mean);
@@ -229,6 +250,10 @@ void AddBenchCommand(CLI::App& app, std::function<int()>* action) {
   slam->add_option("--json", slam_args->json_file, "Also write the results as JSON");
   slam->add_option("--camera", slam_args->camera_file,
                    "camera.yaml to use instead of the sequence's own (for a real sequence without one)");
+  slam->add_option("--tracker", slam_args->tracker_options,
+                   "Override a tracker option, NAME=VALUE (repeatable; see slam/tracker.h), e.g. orb.max_features=2000");
+  slam->add_option("--refiner", slam_args->refiner_options,
+                   "Override a refinement option of the mutual loop, NAME=VALUE (repeatable; see seg/refiner.h)");
   slam->callback([slam_args, action] { *action = [slam_args] { return RunBenchSlam(*slam_args); }; });
 }
 

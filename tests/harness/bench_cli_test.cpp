@@ -79,6 +79,33 @@ TEST_F(BenchCliTest, MutualLoopWithASegmenterTimesTheMaskRefinement) {
   EXPECT_NE(both.stderr_text.find("exclude each other"), std::string::npos) << both.stderr_text;
 }
 
+// --tracker and --refiner measure other settings: the features requested follow
+// orb.max_features, and the overrides are printed and kept in the JSON.
+TEST_F(BenchCliTest, SlamTakesTrackerAndRefinerOptions) {
+  const fs::path sequence = kDataDir / "office_seg" / "pass1";
+  ASSERT_TRUE(fs::is_directory(sequence)) << sequence;
+  const fs::path json_file = dir_ / "bench.json";
+  const CommandOutput out =
+      Run("bench slam " + sequence.string() + " --mode mutual --segmenter fcis-like --frames 6 --tracker orb.max_features=500" +
+          " --refiner trim_keeps_region_depth=0 --json " + json_file.string());
+  ASSERT_EQ(out.exit_code, 0) << out.stderr_text;
+  EXPECT_NE(out.stdout_text.find("500 features requested"), std::string::npos) << out.stdout_text;
+  EXPECT_NE(out.stdout_text.find("refiner options: trim_keeps_region_depth=0"), std::string::npos) << out.stdout_text;
+  const nlohmann::json json = nlohmann::json::parse(ReadText(json_file));
+  EXPECT_EQ(json.at("features_requested"), 500);
+  EXPECT_EQ(json.at("tracker_options"), nlohmann::json::array({"orb.max_features=500"}));
+  EXPECT_EQ(json.at("refiner_options"), nlohmann::json::array({"trim_keeps_region_depth=0"}));
+
+  for (const auto& [arguments, message] :
+       {std::pair<std::string, std::string>{" --mode plain --refiner depth_tolerance=0.1", "applies to the mutual loop"},
+        {" --mode mutual --segmenter clean --refiner depth_tolerance=2", "depth_tolerance must lie in [0, 1)"},
+        {" --mode plain --tracker orb.max_feature=500", "unknown field 'orb.max_feature'"}}) {
+    const CommandOutput refused = Run("bench slam " + sequence.string() + arguments);
+    EXPECT_EQ(refused.exit_code, 1) << arguments;
+    EXPECT_NE(refused.stderr_text.find(message), std::string::npos) << arguments << ": " << refused.stderr_text;
+  }
+}
+
 TEST_F(BenchCliTest, SlamOnASequenceWithoutCameraNeedsCamera) {
   const fs::path source = kDataDir / "office_static" / "pass1";
   ASSERT_TRUE(fs::is_directory(source)) << source;
