@@ -1,7 +1,8 @@
 // Pinhole camera intrinsics in OpenCV's pixel convention: pixel centres lie at integer
 // coordinates, so the top-left pixel's centre is (0, 0) and the image spans
-// [-0.5, W-0.5] x [-0.5, H-0.5]. No distortion model: both the renderer and the
-// published TUM/7-Scenes intrinsics segslam uses are distortion-free.
+// [-0.5, W-0.5] x [-0.5, H-0.5]. No distortion model: the renderer's camera is ideal,
+// and a real camera's lens distortion is taken out of its images as a sequence is read
+// (core/lens_distortion.h), so everything downstream works on pinhole images.
 #pragma once
 
 #include <string>

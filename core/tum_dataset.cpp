@@ -56,7 +56,8 @@ double ParseStamp(const std::string& token, const std::string& origin) {
   return stamp;
 }
 
-const char* const kCameraKeys[] = {"width", "height", "fx", "fy", "cx", "cy", "depth_factor"};
+const char* const kCameraKeys[] = {"width", "height", "fx", "fy", "cx", "cy", "depth_factor",
+                                   "k1", "k2", "p1", "p2", "k3"};
 
 }  // namespace
 
@@ -66,7 +67,7 @@ bool SequenceCamera::IsValid(std::string* error) const {
     if (error != nullptr) *error = "depth_factor must be finite and positive";
     return false;
   }
-  return true;
+  return distortion.IsValid(error);
 }
 
 SequenceCamera ReadCameraYaml(const std::filesystem::path& path) {
@@ -82,7 +83,8 @@ SequenceCamera ReadCameraYaml(const std::filesystem::path& path) {
     const std::string key = item.first.as<std::string>();
     if (std::find(std::begin(kCameraKeys), std::end(kCameraKeys), key) == std::end(kCameraKeys)) {
       throw FileError(path, "unknown key '" + key +
-                                "' (expected width, height, fx, fy, cx, cy, depth_factor)");
+                                "' (expected width, height, fx, fy, cx, cy, depth_factor, and "
+                                "optionally k1, k2, p1, p2, k3)");
     }
   }
   auto get_double = [&](const char* key) {
@@ -109,6 +111,9 @@ SequenceCamera ReadCameraYaml(const std::filesystem::path& path) {
   camera.intrinsics.cx = get_double("cx");
   camera.intrinsics.cy = get_double("cy");
   camera.depth_factor = get_double("depth_factor");
+  auto get_optional = [&](const char* key) { return root[key] ? get_double(key) : 0.0; };
+  camera.distortion = {get_optional("k1"), get_optional("k2"), get_optional("p1"), get_optional("p2"),
+                       get_optional("k3")};
   std::string error;
   if (!camera.IsValid(&error)) throw FileError(path, "invalid camera: " + error);
   return camera;
@@ -124,24 +129,34 @@ void WriteCameraYaml(const std::filesystem::path& path, const SequenceCamera& ca
       "# depth_factor: stored 16-bit depth value per metre (0 = no depth).\n"
       "width: {}\nheight: {}\nfx: {}\nfy: {}\ncx: {}\ncy: {}\ndepth_factor: {}\n",
       k.width, k.height, k.fx, k.fy, k.cx, k.cy, camera.depth_factor);
-  WriteFileAtomically(path, text);
+  const LensDistortion& d = camera.distortion;
+  const std::string distortion =
+      d.IsZero() ? ""
+                 : fmt::format("# Lens distortion of the stored images (OpenCV's k1, k2, p1, p2, k3).\n"
+                               "k1: {}\nk2: {}\np1: {}\np2: {}\nk3: {}\n",
+                               d.k1, d.k2, d.p1, d.p2, d.k3);
+  WriteFileAtomically(path, text + distortion);
 }
 
 std::optional<SequenceCamera> TumDefaultCamera(const std::string& sequence_name) {
-  // Published calibrations from the TUM RGB-D "file formats" page (ROS default intrinsics
-  // for freiburg3, whose images are already undistorted).
+  // Published calibrations of the colour cameras from the TUM RGB-D "file formats" page,
+  // d0..d4 being OpenCV's k1, k2, p1, p2, k3 (ROS default intrinsics for freiburg3, whose
+  // images are already undistorted).
   struct Known {
     const char* tag;
     double fx, fy, cx, cy;
+    LensDistortion distortion;
   };
-  static const Known kKnown[] = {{"freiburg1", 517.3, 516.5, 318.6, 255.3},
-                                 {"freiburg2", 520.9, 521.0, 325.1, 249.7},
-                                 {"freiburg3", 535.4, 539.2, 320.1, 247.6}};
+  static const Known kKnown[] = {
+      {"freiburg1", 517.3, 516.5, 318.6, 255.3, {0.2624, -0.9531, -0.0054, 0.0026, 1.1633}},
+      {"freiburg2", 520.9, 521.0, 325.1, 249.7, {0.2312, -0.7849, -0.0033, -0.0001, 0.9172}},
+      {"freiburg3", 535.4, 539.2, 320.1, 247.6, {}}};
   for (const Known& known : kKnown) {
     if (sequence_name.find(known.tag) != std::string::npos) {
       SequenceCamera camera;
       camera.intrinsics = {640, 480, known.fx, known.fy, known.cx, known.cy};
       camera.depth_factor = 5000;
+      camera.distortion = known.distortion;
       return camera;
     }
   }
@@ -305,6 +320,10 @@ TumSequence TumSequence::Open(const std::filesystem::path& dir,
   if (std::filesystem::exists(groundtruth)) {
     sequence.groundtruth_ = ReadTumTrajectory(groundtruth);
   }
+  if (!sequence.camera_.distortion.IsZero()) {
+    sequence.undistorter_ =
+        std::make_shared<const ImageUndistorter>(sequence.camera_.intrinsics, sequence.camera_.distortion);
+  }
   return sequence;
 }
 
@@ -332,7 +351,24 @@ RgbdFrame TumSequence::LoadFrame(size_t i) const {
                                                 mat->cols, mat->rows, w, h));
     }
   }
+  if (undistorter_ != nullptr) {
+    frame.color_bgr = undistorter_->UndistortColour(frame.color_bgr);
+    frame.depth_m = undistorter_->UndistortDepth(frame.depth_m);
+  }
   return frame;
+}
+
+cv::Mat TumSequence::LoadInstanceMask(const std::filesystem::path& png) const {
+  cv::Mat ids = ReadInstanceMask(png);
+  const int w = camera_.intrinsics.width, h = camera_.intrinsics.height;
+  if (ids.cols != w || ids.rows != h) {
+    throw FileError(png, fmt::format("mask is {}x{}, the sequence's images are {}x{}", ids.cols, ids.rows, w, h));
+  }
+  return undistorter_ != nullptr ? undistorter_->UndistortIds(ids) : ids;
+}
+
+cv::Mat TumSequence::InstanceMaskAsStored(const cv::Mat& ids) const {
+  return undistorter_ != nullptr ? undistorter_->DistortIds(ids) : ids;
 }
 
 TumSequenceWriter::TumSequenceWriter(std::filesystem::path dir, SequenceCamera camera)

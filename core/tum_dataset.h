@@ -11,6 +11,7 @@
 
 #include <cstddef>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
 #include <utility>
@@ -20,6 +21,7 @@
 
 #include "core/camera.h"
 #include "core/frame.h"
+#include "core/lens_distortion.h"
 #include "core/pose.h"
 
 namespace segslam {
@@ -27,19 +29,25 @@ namespace segslam {
 struct SequenceCamera {
   PinholeCamera intrinsics;   // Of the (registered) colour and depth images.
   double depth_factor = 5000; // Stored depth value per metre, > 0 (5000: TUM indoors).
+  // Of the stored images; TumSequence::LoadFrame returns them undistorted (see
+  // core/lens_distortion.h). Zero for generated datasets and TUM freiburg3.
+  LensDistortion distortion;
 
   bool IsValid(std::string* error) const;
 };
 
-// camera.yaml with exactly the keys width, height, fx, fy, cx, cy, depth_factor.
+// camera.yaml with the keys width, height, fx, fy, cx, cy, depth_factor, and optionally
+// the distortion coefficients k1, k2, p1, p2, k3 (OpenCV's, TUM's d0..d4; absent: 0).
 // Throws naming the file and key on a missing or unknown key, a wrong type, malformed
 // YAML or invalid values (see PinholeCamera::IsValid).
 SequenceCamera ReadCameraYaml(const std::filesystem::path& path);
-// Writes camera.yaml atomically; numbers are written with round-trip precision.
+// Writes camera.yaml atomically; numbers are written with round-trip precision, the
+// distortion coefficients only when there is distortion.
 void WriteCameraYaml(const std::filesystem::path& path, const SequenceCamera& camera);
 
-// The published TUM RGB-D intrinsics (640x480, depth factor 5000) if `sequence_name`
-// contains "freiburg1", "freiburg2" or "freiburg3"; std::nullopt otherwise.
+// The published TUM RGB-D calibration of the colour camera (640x480, depth factor 5000,
+// with the distortion of freiburg1 and freiburg2) if `sequence_name` contains
+// "freiburg1", "freiburg2" or "freiburg3"; std::nullopt otherwise.
 std::optional<SequenceCamera> TumDefaultCamera(const std::string& sequence_name);
 
 struct TumFrameEntry {
@@ -62,7 +70,8 @@ std::vector<TumFrameEntry> AssociateByTimestamp(
 // skipped). Throws on a malformed line, NaN or non-increasing stamps, naming file:line.
 std::vector<std::pair<double, std::string>> ReadTumFileList(const std::filesystem::path& path);
 
-// A TUM-layout sequence opened for reading. Copyable value (holds only lists).
+// A TUM-layout sequence opened for reading. Copyable value (lists, and for a distorted
+// camera the undistortion maps, shared between copies).
 class TumSequence {
  public:
   // Camera from `camera` if given, else <dir>/camera.yaml, else TumDefaultCamera(name of
@@ -80,9 +89,18 @@ class TumSequence {
   const std::vector<TumFrameEntry>& entries() const { return entries_; }
 
   // Loads frame i (0 <= i < size(), else throws): colour CV_8UC3 and depth CV_32F
-  // metres, stamp = rgb stamp. Throws naming the file if an image is unreadable, has the
-  // wrong type, or a size other than the camera's.
+  // metres, stamp = rgb stamp, undistorted when the camera has distortion. Throws naming
+  // the file if an image is unreadable, has the wrong type, or a size other than the
+  // camera's.
   RgbdFrame LoadFrame(size_t i) const;
+
+  // An instance mask (16-bit PNG) drawn on this sequence's stored images, e.g. by an
+  // external segmenter, in the geometry of LoadFrame's images. Throws naming the file if
+  // it is unreadable, not 16-bit single-channel or of a size other than the camera's.
+  cv::Mat LoadInstanceMask(const std::filesystem::path& png) const;
+  // An id image in LoadFrame's geometry, as it lies on the stored images: what a run
+  // writes beside the sequence. The image itself when there is no distortion.
+  cv::Mat InstanceMaskAsStored(const cv::Mat& ids) const;
 
   const SequenceCamera& camera() const { return camera_; }
   const std::filesystem::path& dir() const { return dir_; }
@@ -95,6 +113,7 @@ class TumSequence {
   SequenceCamera camera_;
   std::vector<TumFrameEntry> entries_;
   std::vector<StampedPose> groundtruth_;
+  std::shared_ptr<const ImageUndistorter> undistorter_;  // Null without distortion.
 };
 
 // Writes a sequence in the TUM layout. Add() per frame, then Finish(); until Finish()

@@ -47,7 +47,7 @@ int RunPreview(const PreviewArgs& args) {
     const fs::path mask_file = fs::path(args.sequence_dir) / "masks" /
                                fs::path(sequence.entries()[index].rgb_file).filename();
     cv::Mat overlay = fs::exists(mask_file)
-                          ? OverlayPicture(frame.color_bgr, ReadInstanceMask(mask_file))
+                          ? OverlayPicture(frame.color_bgr, sequence.LoadInstanceMask(mask_file))
                           : frame.color_bgr.clone();
     rows.push_back(CaptionedRow(
         {frame.color_bgr, DepthPicture(frame.depth_m, max_depth_m), overlay},

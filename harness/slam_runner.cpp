@@ -98,7 +98,7 @@ class MaskSource {
     slam::FrameInstances instances;
     const fs::path path =
         sequence_.dir() / "masks" / (StemOf(sequence_, static_cast<size_t>(frame.index)).string() + ".png");
-    instances.ids = ReadInstanceMask(path);
+    instances.ids = sequence_.LoadInstanceMask(path);
     if (instances.ids.size() != frame.color_bgr.size()) {
       throw FileError(path, "mask size differs from the frame's");
     }
@@ -114,11 +114,11 @@ class MaskSource {
   std::unordered_set<std::uint16_t> moveable_;
 };
 
-// A frame's refined masks in the external-mask layout (seg/external_masks.h), so a later
-// run or seg-eval can read them back with --masks.
+// A frame's refined masks in the external-mask layout (seg/external_masks.h), on the
+// sequence's stored images, so a later run or seg-eval can read them back with --masks.
 void WriteMasksInExternalLayout(const fs::path& dir, const fs::path& stem, const seg::FrameSegmentation& masks,
-                                cv::Size size) {
-  WriteInstanceMask(dir / (stem.string() + ".png"), masks.ToIdImage(size));
+                                const TumSequence& sequence, cv::Size size) {
+  WriteInstanceMask(dir / (stem.string() + ".png"), sequence.InstanceMaskAsStored(masks.ToIdImage(size)));
   nlohmann::json table = {{"instances", nlohmann::json::array()}};
   for (const seg::InstanceMask& instance : masks.instances) {
     table["instances"].push_back(
@@ -188,13 +188,13 @@ SlamRunResult RunMutualLoop(const TumSequence& sequence, const SlamRunOptions& o
     const fs::path stem = StemOf(sequence, static_cast<size_t>(i));
     if (score) {
       const fs::path gt_path = gt_masks_dir / (stem.string() + ".png");
-      const cv::Mat gt_ids = ReadInstanceMask(gt_path);
+      const cv::Mat gt_ids = sequence.LoadInstanceMask(gt_path);
       if (gt_ids.size() != frame.color_bgr.size()) throw FileError(gt_path, "mask size differs from the frame's");
       raw_scores.AddFrame(gt_ids, gt_table, step.initial);
       refined_scores.AddFrame(gt_ids, gt_table, step.refined);
     }
     if (!options.refined_masks_dir.empty()) {
-      WriteMasksInExternalLayout(options.refined_masks_dir, stem, step.refined, frame.color_bgr.size());
+      WriteMasksInExternalLayout(options.refined_masks_dir, stem, step.refined, sequence, frame.color_bgr.size());
     }
     if (options.on_frame) options.on_frame(i + 1, total);
   }

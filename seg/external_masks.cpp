@@ -171,7 +171,7 @@ FrameSegmentation ExternalMaskSegmenter::Segment(const RgbdFrame& frame) {
   const fs::path mask_path = MaskPath(i);
   const fs::path table_path = TablePath(i);
   const auto table = ParseExternalMaskTable(ReadJsonFile(table_path), table_path.string());
-  const cv::Mat ids = ReadInstanceMask(mask_path);
+  const cv::Mat ids = sequence_.LoadInstanceMask(mask_path);
   const cv::Size frame_size = !frame.color_bgr.empty()
                                   ? frame.color_bgr.size()
                                   : cv::Size(sequence_.camera().intrinsics.width,

@@ -11,7 +11,8 @@
 // (then they must agree); "score" is the confidence in [0, 1] (optional, default 1).
 // Every nonzero id of the PNG must have an entry; an entry whose id does not occur in
 // the PNG is allowed (the detection was hidden by others) and yields no instance.
-// Ids need not be stable over frames.
+// Ids need not be stable over frames. The masks lie on the stored colour images; with a
+// distorted camera they are undistorted as the frames are (TumSequence::LoadInstanceMask).
 #pragma once
 
 #include <cstdint>
@@ -59,8 +60,8 @@ class ExternalMaskSegmenter : public Segmenter {
   ExternalMaskSegmenter& operator=(const ExternalMaskSegmenter&) = delete;
 
   // Reads frame.index's files. Throws segslam::Error naming the file and what is wrong:
-  // unreadable, not 16-bit single-channel, of another size than the frame (frame.color_bgr,
-  // else the sequence's camera), an id missing from the table, a bad table (see
+  // unreadable, not 16-bit single-channel, of another size than the sequence's images or
+  // the frame (frame.color_bgr), an id missing from the table, a bad table (see
   // ParseExternalMaskTable), or frame.index out of range.
   FrameSegmentation Segment(const RgbdFrame& frame) override;
   // "external:<dir>".

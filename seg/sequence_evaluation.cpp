@@ -95,7 +95,7 @@ SequenceSegEval EvaluateSequenceWithGroundTruthPoses(const SegEvalOptions& optio
   for (size_t i = 0; i < sequence.size(); ++i) {
     frame = sequence.LoadFrame(i);
     frame.index = static_cast<int>(i);
-    gt_ids = ReadInstanceMask(
+    gt_ids = sequence.LoadInstanceMask(
         dir / "masks" / (fs::path(sequence.entries()[i].rgb_file).stem().string() + ".png"));
     initial = segmenter.Segment(frame);
 

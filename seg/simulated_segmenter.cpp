@@ -895,7 +895,7 @@ SimulatedFrame SimulatedSegmenter::SegmentWithTruth(const RgbdFrame& frame) {
   if (frame.index < 0) throw FileError(dir_, fmt::format("negative frame index {}", frame.index));
   const fs::path path = MaskPath(static_cast<size_t>(frame.index));
   if (!fs::exists(path)) throw FileError(path, "ground-truth mask is missing");
-  const cv::Mat ids = ReadInstanceMask(path);
+  const cv::Mat ids = sequence_.LoadInstanceMask(path);
   const cv::Size expected = !frame.color_bgr.empty()
                                 ? frame.color_bgr.size()
                                 : cv::Size(sequence_.camera().intrinsics.width,

@@ -1,7 +1,9 @@
 #include "core/tum_dataset.h"
 
 #include <fstream>
+#include <iterator>
 #include <optional>
+#include <string>
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
@@ -37,6 +39,20 @@ TEST_F(TumDatasetTest, CameraYamlRoundTrip) {
   EXPECT_EQ(back.intrinsics.cx, camera.intrinsics.cx);
   EXPECT_EQ(back.intrinsics.cy, camera.intrinsics.cy);
   EXPECT_EQ(back.depth_factor, camera.depth_factor);
+  EXPECT_TRUE(back.distortion.IsZero());
+  // No distortion: no distortion keys, so the file reads as before they existed.
+  std::ifstream written(path);
+  const std::string text((std::istreambuf_iterator<char>(written)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(text.find("k1"), std::string::npos) << text;
+
+  camera.distortion = {0.2624, -0.9531, -0.0054, 0.0026, 1.1633};
+  WriteCameraYaml(path, camera);
+  const LensDistortion distortion = ReadCameraYaml(path).distortion;
+  EXPECT_EQ(distortion.k1, 0.2624);
+  EXPECT_EQ(distortion.k2, -0.9531);
+  EXPECT_EQ(distortion.p1, -0.0054);
+  EXPECT_EQ(distortion.p2, 0.0026);
+  EXPECT_EQ(distortion.k3, 1.1633);
 }
 
 TEST_F(TumDatasetTest, CameraYamlErrorsNameKeyAndFile) {
@@ -60,6 +76,15 @@ TEST_F(TumDatasetTest, CameraYamlErrorsNameKeyAndFile) {
   message = ErrorMessage([&] { ReadCameraYaml(path); });
   EXPECT_NE(message.find("'width' must be an integer"), std::string::npos) << message;
 
+  // Distortion coefficients are optional, each on its own; present, they must be numbers.
+  std::ofstream(path) << good << "depth_factor: 5000\nk1: 0.25\n";
+  const LensDistortion only_k1 = ReadCameraYaml(path).distortion;
+  EXPECT_EQ(only_k1.k1, 0.25);
+  EXPECT_EQ(only_k1.k2, 0.0);
+  std::ofstream(path) << good << "depth_factor: 5000\np2: .nan\n";
+  message = ErrorMessage([&] { ReadCameraYaml(path); });
+  EXPECT_NE(message.find("'p2' must be a finite number"), std::string::npos) << message;
+
   std::ofstream(path) << "width: [640\n";
   message = ErrorMessage([&] { ReadCameraYaml(path); });
   EXPECT_NE(message.find("malformed YAML"), std::string::npos) << message;
@@ -71,8 +96,15 @@ TEST(TumDefaultCamera, Freiburg) {
   EXPECT_EQ(fr1->intrinsics.fx, 517.3);
   EXPECT_EQ(fr1->intrinsics.cy, 255.3);
   EXPECT_EQ(fr1->depth_factor, 5000);
+  EXPECT_EQ(fr1->distortion.k1, 0.2624);  // TUM's d0..d4 for the freiburg1 colour camera.
+  EXPECT_EQ(fr1->distortion.k3, 1.1633);
+  const auto fr2 = TumDefaultCamera("rgbd_dataset_freiburg2_desk");
+  ASSERT_TRUE(fr2.has_value());
+  EXPECT_EQ(fr2->distortion.k2, -0.7849);
   ASSERT_TRUE(TumDefaultCamera("rgbd_dataset_freiburg3_walking_xyz").has_value());
   EXPECT_EQ(TumDefaultCamera("rgbd_dataset_freiburg3_walking_xyz")->intrinsics.fx, 535.4);
+  // freiburg3's images are stored undistorted.
+  EXPECT_TRUE(TumDefaultCamera("rgbd_dataset_freiburg3_walking_xyz")->distortion.IsZero());
   EXPECT_FALSE(TumDefaultCamera("my_sequence").has_value());
 }
 
@@ -152,6 +184,50 @@ TEST_F(TumDatasetTest, WriterThenOpenRoundTrip) {
   const std::string message =
       ErrorMessage([&] { TumSequence::Open(seq_dir, wrong).LoadFrame(0); });
   EXPECT_NE(message.find("camera expects 64x24"), std::string::npos) << message;
+}
+
+TEST_F(TumDatasetTest, DistortedSequenceIsReadUndistortedAndMasksWrittenBackAsStored) {
+  SequenceCamera camera;
+  camera.intrinsics = {64, 48, 51.7, 51.6, 31.9, 25.5};  // freiburg1's field of view, small
+  camera.depth_factor = 5000;
+  camera.distortion = {0.2624, -0.9531, -0.0054, 0.0026, 1.1633};
+  const auto seq_dir = dir() / "seq";
+  {
+    TumSequenceWriter writer(seq_dir, camera);
+    RgbdFrame frame;
+    frame.stamp_s = 1.0;
+    frame.color_bgr = cv::Mat(48, 64, CV_8UC3);
+    cv::randu(frame.color_bgr, 0, 256);
+    frame.depth_m = cv::Mat(48, 64, CV_32F);
+    cv::randu(frame.depth_m, 0.5, 4.0);
+    writer.Add(frame, Eigen::Isometry3d::Identity());
+    writer.Finish();
+  }
+  cv::Mat stored_ids(48, 64, CV_16UC1, cv::Scalar(0));
+  stored_ids(cv::Rect(0, 0, 20, 16)).setTo(7);  // Reaches into the corner the lens bends most.
+  stored_ids(cv::Rect(30, 20, 10, 10)).setTo(3);
+  std::filesystem::create_directories(seq_dir / "masks");
+  WriteInstanceMask(seq_dir / "masks" / "1.000000.png", stored_ids);
+
+  const TumSequence sequence = TumSequence::Open(seq_dir);
+  EXPECT_EQ(sequence.camera().distortion.k3, 1.1633);
+  const ImageUndistorter undistorter(camera.intrinsics, camera.distortion);
+  const RgbdFrame frame = sequence.LoadFrame(0);
+  const cv::Mat stored_colour = ReadColorImage(seq_dir / "rgb" / "1.000000.png");
+  const cv::Mat stored_depth = ReadDepthImage(seq_dir / "depth" / "1.000000.png", camera.depth_factor);
+  EXPECT_EQ(cv::norm(frame.color_bgr, undistorter.UndistortColour(stored_colour), cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(frame.depth_m, undistorter.UndistortDepth(stored_depth), cv::NORM_INF), 0.0);
+  EXPECT_GT(cv::norm(frame.depth_m, stored_depth, cv::NORM_INF), 0.0);  // It did change.
+
+  const cv::Mat ids = sequence.LoadInstanceMask(seq_dir / "masks" / "1.000000.png");
+  EXPECT_EQ(cv::norm(ids, undistorter.UndistortIds(stored_ids), cv::NORM_INF), 0.0);
+  EXPECT_GT(cv::countNonZero(ids != stored_ids), 0);
+  EXPECT_EQ(cv::norm(sequence.InstanceMaskAsStored(ids), undistorter.DistortIds(ids), cv::NORM_INF), 0.0);
+
+  WriteInstanceMask(dir() / "small.png", cv::Mat(24, 32, CV_16UC1, cv::Scalar(0)));
+  const std::string message = ErrorMessage([&] { sequence.LoadInstanceMask(dir() / "small.png"); });
+  EXPECT_NE(message.find((dir() / "small.png").string()), std::string::npos) << message;
+  EXPECT_NE(message.find("mask is 32x24, the sequence's images are 64x48"), std::string::npos) << message;
 }
 
 TEST_F(TumDatasetTest, OpenErrors) {

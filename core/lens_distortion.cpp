@@ -1,0 +1,115 @@
+#include "core/lens_distortion.h"
+
+#include <cmath>
+#include <vector>
+
+#include <fmt/format.h>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "core/error.h"
+
+namespace segslam {
+namespace {
+
+// A stored pixel whose inverse does not re-distort to within this distance of itself lies
+// where the model folds over (outside the calibrated field); it gets no pinhole source.
+constexpr double kInverseToleranceNormalised = 1e-5;
+
+}  // namespace
+
+bool LensDistortion::IsValid(std::string* error) const {
+  for (double value : {k1, k2, p1, p2, k3}) {
+    if (!std::isfinite(value)) {
+      if (error != nullptr) *error = "distortion coefficients k1, k2, p1, p2, k3 must be finite";
+      return false;
+    }
+  }
+  return true;
+}
+
+cv::Vec2d LensDistortion::Distort(const cv::Vec2d& undistorted) const {
+  const double x = undistorted[0], y = undistorted[1];
+  const double r2 = x * x + y * y;
+  const double radial = 1 + r2 * (k1 + r2 * (k2 + r2 * k3));
+  return {x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x),
+          y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y};
+}
+
+ImageUndistorter::ImageUndistorter(const PinholeCamera& camera, const LensDistortion& distortion)
+    : camera_(camera), distortion_(distortion) {
+  std::string error;
+  if (!camera.IsValid(&error)) throw Error("lens undistortion: invalid camera: " + error);
+  if (!distortion.IsValid(&error)) throw Error("lens undistortion: " + error);
+  const cv::Size size(camera.width, camera.height);
+
+  // Pinhole pixel -> stored pixel: the model itself.
+  undistort_map_x_.create(size, CV_32F);
+  undistort_map_y_.create(size, CV_32F);
+  for (int v = 0; v < size.height; ++v) {
+    for (int u = 0; u < size.width; ++u) {
+      const cv::Vec2d d = distortion.Distort({(u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy});
+      undistort_map_x_.at<float>(v, u) = static_cast<float>(camera.fx * d[0] + camera.cx);
+      undistort_map_y_.at<float>(v, u) = static_cast<float>(camera.fy * d[1] + camera.cy);
+    }
+  }
+
+  // Stored pixel -> pinhole pixel: OpenCV's iterative inversion, checked by re-distorting.
+  std::vector<cv::Point2d> stored;
+  stored.reserve(static_cast<size_t>(size.area()));
+  for (int v = 0; v < size.height; ++v) {
+    for (int u = 0; u < size.width; ++u) stored.emplace_back(u, v);
+  }
+  std::vector<cv::Point2d> normalised;
+  const cv::Matx33d K = camera.KCv();
+  cv::undistortPoints(stored, normalised, K, distortion.Coefficients(), cv::noArray(), cv::noArray(),
+                      cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 100, 1e-6));
+  distort_map_x_.create(size, CV_32F);
+  distort_map_y_.create(size, CV_32F);
+  for (int v = 0, k = 0; v < size.height; ++v) {
+    for (int u = 0; u < size.width; ++u, ++k) {
+      const cv::Vec2d x(normalised[k].x, normalised[k].y);
+      const cv::Vec2d back = distortion.Distort(x);
+      const bool inverted = std::hypot(back[0] - (u - camera.cx) / camera.fx,
+                                       back[1] - (v - camera.cy) / camera.fy) < kInverseToleranceNormalised;
+      distort_map_x_.at<float>(v, u) = inverted ? static_cast<float>(camera.fx * x[0] + camera.cx) : -1e6f;
+      distort_map_y_.at<float>(v, u) = inverted ? static_cast<float>(camera.fy * x[1] + camera.cy) : -1e6f;
+    }
+  }
+}
+
+cv::Mat ImageUndistorter::Remap(const cv::Mat& image, const cv::Mat& map_x, const cv::Mat& map_y,
+                                Resampling resampling) const {
+  if (image.cols != camera_.width || image.rows != camera_.height) {
+    throw Error(fmt::format("lens undistortion: image is {}x{}, the camera's is {}x{}", image.cols, image.rows,
+                            camera_.width, camera_.height));
+  }
+  cv::Mat out;
+  if (resampling == Resampling::kSmooth) {
+    cv::remap(image, out, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+  } else {
+    cv::remap(image, out, map_x, map_y, cv::INTER_NEAREST, cv::BORDER_CONSTANT, cv::Scalar::all(0));
+  }
+  return out;
+}
+
+cv::Mat ImageUndistorter::UndistortColour(const cv::Mat& image) const {
+  return Remap(image, undistort_map_x_, undistort_map_y_, Resampling::kSmooth);
+}
+cv::Mat ImageUndistorter::UndistortDepth(const cv::Mat& depth) const {
+  return Remap(depth, undistort_map_x_, undistort_map_y_, Resampling::kNearest);
+}
+cv::Mat ImageUndistorter::UndistortIds(const cv::Mat& ids) const {
+  return Remap(ids, undistort_map_x_, undistort_map_y_, Resampling::kNearest);
+}
+cv::Mat ImageUndistorter::DistortColour(const cv::Mat& image) const {
+  return Remap(image, distort_map_x_, distort_map_y_, Resampling::kSmooth);
+}
+cv::Mat ImageUndistorter::DistortDepth(const cv::Mat& depth) const {
+  return Remap(depth, distort_map_x_, distort_map_y_, Resampling::kNearest);
+}
+cv::Mat ImageUndistorter::DistortIds(const cv::Mat& ids) const {
+  return Remap(ids, distort_map_x_, distort_map_y_, Resampling::kNearest);
+}
+
+}  // namespace segslam
