@@ -36,6 +36,23 @@ cv::Vec2d LensDistortion::Distort(const cv::Vec2d& undistorted) const {
           y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y};
 }
 
+double LensDistortion::DistortRadius(double r) const {
+  const double r2 = r * r;
+  return r * (1 + r2 * (k1 + r2 * (k2 + r2 * k3)));
+}
+
+double LensDistortion::GrowingRadius(double limit) const {
+  // d r_d / d r = 1 + 3 k1 r^2 + 5 k2 r^4 + 7 k3 r^6, sampled finely enough for the
+  // polynomials of real lenses (a few sign changes at most).
+  constexpr int kSteps = 4096;
+  for (int i = 1; i <= kSteps; ++i) {
+    const double r = limit * i / kSteps;
+    const double r2 = r * r;
+    if (1 + r2 * (3 * k1 + r2 * (5 * k2 + r2 * 7 * k3)) <= 0) return limit * (i - 1) / kSteps;
+  }
+  return limit;
+}
+
 ImageUndistorter::ImageUndistorter(const PinholeCamera& camera, const LensDistortion& distortion)
     : camera_(camera), distortion_(distortion) {
   std::string error;

@@ -35,6 +35,13 @@ struct LensDistortion {
   // Where a point at normalised pinhole coordinates `undistorted` appears in the stored
   // image, in normalised coordinates (the formula above).
   cv::Vec2d Distort(const cv::Vec2d& undistorted) const;
+
+  // The radial part alone: r_d = r (1 + k1 r^2 + k2 r^4 + k3 r^6), normalised radii.
+  double DistortRadius(double r) const;
+  // The largest radius up to which DistortRadius keeps growing, searched up to `limit`
+  // (returned when it grows on the whole of [0, limit]). Beyond it the lens would fold
+  // the image back onto itself: a polynomial fitted to a smaller field.
+  double GrowingRadius(double limit) const;
 };
 
 // Resamples whole images between a distorted camera's stored geometry and the pinhole

@@ -364,7 +364,11 @@ cv::Mat TumSequence::LoadInstanceMask(const std::filesystem::path& png) const {
   if (ids.cols != w || ids.rows != h) {
     throw FileError(png, fmt::format("mask is {}x{}, the sequence's images are {}x{}", ids.cols, ids.rows, w, h));
   }
-  return undistorter_ != nullptr ? undistorter_->UndistortIds(ids) : ids;
+  return InstanceMaskAsLoaded(ids);
+}
+
+cv::Mat TumSequence::InstanceMaskAsLoaded(const cv::Mat& stored_ids) const {
+  return undistorter_ != nullptr ? undistorter_->UndistortIds(stored_ids) : stored_ids;
 }
 
 cv::Mat TumSequence::InstanceMaskAsStored(const cv::Mat& ids) const {

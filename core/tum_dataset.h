@@ -98,8 +98,10 @@ class TumSequence {
   // external segmenter, in the geometry of LoadFrame's images. Throws naming the file if
   // it is unreadable, not 16-bit single-channel or of a size other than the camera's.
   cv::Mat LoadInstanceMask(const std::filesystem::path& png) const;
-  // An id image in LoadFrame's geometry, as it lies on the stored images: what a run
-  // writes beside the sequence. The image itself when there is no distortion.
+  // An id or mask image (any type, the camera's size) of the stored images in LoadFrame's
+  // geometry (nearest pixel), and back: what a run writes beside the sequence. The image
+  // itself when there is no distortion.
+  cv::Mat InstanceMaskAsLoaded(const cv::Mat& stored_ids) const;
   cv::Mat InstanceMaskAsStored(const cv::Mat& ids) const;
 
   const SequenceCamera& camera() const { return camera_; }

@@ -310,13 +310,14 @@ std::string StemOf(const TumSequence& sequence, int frame) {
 }
 
 // A frame's masks in the external-mask layout (seg/external_masks.h), as the mutual loop
-// writes its refined masks.
-seg::FrameSegmentation ReadMasksInExternalLayout(const std::filesystem::path& dir, const std::string& stem,
-                                                 cv::Size frame_size, int frame_index) {
+// writes its refined masks (on the stored images), in the geometry of the sequence's frames.
+seg::FrameSegmentation ReadMasksInExternalLayout(const TumSequence& sequence, const std::filesystem::path& dir,
+                                                 const std::string& stem, cv::Size frame_size, int frame_index) {
   const std::filesystem::path png = dir / (stem + ".png");
   const std::filesystem::path json = dir / (stem + ".json");
-  return seg::ExternalMasksToSegmentation(ReadInstanceMask(png), seg::ParseExternalMaskTable(ReadJsonFile(json), json.string()),
-                                          frame_size, frame_index, png.string());
+  return seg::ExternalMasksToSegmentation(sequence.LoadInstanceMask(png),
+                                          seg::ParseExternalMaskTable(ReadJsonFile(json), json.string()), frame_size,
+                                          frame_index, png.string());
 }
 
 std::size_t CountInstances(const cv::Mat& ids) {
@@ -368,9 +369,9 @@ void DrawMaskFigure(const ScenarioReport& report, const RepeatRun& run, const st
     candidate.frame = sequence.LoadFrame(static_cast<std::size_t>(i));
     candidate.frame.index = i;
     const std::string stem = StemOf(sequence, i);
-    candidate.gt_ids = ReadInstanceMask(pass_dir / "masks" / (stem + ".png"));
+    candidate.gt_ids = sequence.LoadInstanceMask(pass_dir / "masks" / (stem + ".png"));
     candidate.raw = segmenter.Segment(candidate.frame);
-    candidate.refined = ReadMasksInExternalLayout(refined_dir, stem, candidate.frame.color_bgr.size(), i);
+    candidate.refined = ReadMasksInExternalLayout(sequence, refined_dir, stem, candidate.frame.color_bgr.size(), i);
     const seg::EvaluationOptions scoring;
     const double raw_miou = seg::SegmentationEvaluator::ScoreFrame(scoring, candidate.gt_ids, gt_table, candidate.raw).mIoU;
     const double refined_miou =
@@ -416,7 +417,7 @@ void DrawFeatureFigure(const ScenarioReport& report, const RepeatRun& run, const
   const std::string title =
       fmt::format("{} pass 1, frame {}, mutual{}", report.scenario_name, frame_index,
                   options.segmenter.empty() ? " on ground-truth masks" : fmt::format(" (seed {})", run.seed));
-  WriteFigure(out, DrawFeatureKinds(frame.color_bgr, ReadInstanceMask(judged_masks), rerun.frames[*chosen], title));
+  WriteFigure(out, DrawFeatureKinds(frame.color_bgr, sequence.LoadInstanceMask(judged_masks), rerun.frames[*chosen], title));
 }
 
 std::string StatusLine(const ScenarioReport& report) {

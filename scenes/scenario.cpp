@@ -3,6 +3,7 @@
 // effective configuration back (ScenarioToYaml) and serves ApplyOverride.
 #include "scenes/scenario.h"
 
+#include "core/camera.h"
 #include "core/error.h"
 
 #include <cmath>
@@ -99,6 +100,7 @@ class FieldTable {
     Add("camera.depth_factor", Double(&c.depth_factor, OpenClosed(0, 65535), "camera.depth_factor"));
     Add("camera.near_m", Double(&c.near_m, Open(0, 10), "camera.near_m"));
     Add("camera.far_m", Double(&c.far_m, OpenClosed(0, 100000), "camera.far_m"));
+    Add("camera.distortion", Distortion(&c.distortion, "camera.distortion"));
 
     SensorSpec& n = s->sensor;
     Add("sensor.enabled", Bool(&n.enabled, "sensor.enabled"));
@@ -295,6 +297,30 @@ class FieldTable {
             }};
   }
 
+  // [k1, k2, p1, p2, k3] (core/lens_distortion.h).
+  Field Distortion(LensDistortion* v, std::string key) const {
+    std::string origin = origin_;
+    return {[=](const YAML::Node& n) {
+              if (!n.IsSequence() || n.size() != 5) {
+                throw KeyError(origin, key, "expected a list of 5 numbers [k1, k2, p1, p2, k3]");
+              }
+              double c[5];
+              for (int i = 0; i < 5; ++i) {
+                c[i] = ReadNumber(n[i], origin, key);
+                if (!Closed(-10, 10).Contains(c[i])) {
+                  throw KeyError(origin, key, "each value must be in [-10, 10] (got " + n[i].Scalar() + ")");
+                }
+              }
+              *v = {c[0], c[1], c[2], c[3], c[4]};
+            },
+            [=] {
+              YAML::Node out(YAML::NodeType::Sequence);
+              for (double c : {v->k1, v->k2, v->p1, v->p2, v->k3}) out.push_back(c);
+              out.SetStyle(YAML::EmitterStyle::Flow);
+              return out;
+            }};
+  }
+
   Field RoomSize(double* v, std::string key) const {
     std::string origin = origin_;
     return {[=](const YAML::Node& n) {
@@ -354,6 +380,22 @@ void ApplyKindDefaults(const std::string& kind, CameraSpec* c, SensorSpec* senso
 
 std::string KeyText(const YAML::Node& key) { return key.IsScalar() ? key.Scalar() : "?"; }
 
+// The generator bends each render through the lens and a run takes the bend out again, so
+// the lens's radial distortion must keep growing over the whole image: out to the image's
+// corners in the pinhole image, and until it reaches them in the stored one.
+void CheckLensCoversTheImage(const CameraSpec& camera, const std::string& origin) {
+  if (camera.distortion.IsZero()) return;
+  const PinholeCamera pinhole = PinholeCamera::FromVerticalFov(camera.width, camera.height, camera.fovy_deg);
+  const double corner = std::hypot(pinhole.cx / pinhole.fx, pinhole.cy / pinhole.fy);
+  const double growing = camera.distortion.GrowingRadius(4 * corner);
+  if (growing < corner || camera.distortion.DistortRadius(growing) < corner) {
+    throw KeyError(origin, "camera.distortion",
+                   "folds the image: its radial distortion stops growing at normalised radius " + Num(growing) +
+                       ", and the image's corners lie at " + Num(corner) +
+                       " (a polynomial fitted to a narrower field of view?)");
+  }
+}
+
 }  // namespace
 
 Scenario ParseScenario(const std::string& yaml_text, const std::string& origin) {
@@ -402,6 +444,7 @@ Scenario ParseScenario(const std::string& yaml_text, const std::string& origin) 
   }
 
   // Checks across keys.
+  CheckLensCoversTheImage(s.camera, origin);
   if (s.camera.far_m <= s.camera.near_m) {
     throw KeyError(origin, "camera.far_m", "must be > camera.near_m (got " + Num(s.camera.far_m) + ")");
   }

@@ -17,6 +17,8 @@
 #include <string>
 #include <vector>
 
+#include "core/lens_distortion.h"
+
 namespace segslam::scenes {
 
 // Which of the two passes over the same place: pass 1 builds the map, pass 2 revisits
@@ -148,6 +150,9 @@ struct CameraSpec {
   double depth_factor = 1000;  // stored PNG value per metre
   double near_m = 0.05;       // clipping planes of the renderer
   double far_m = 200.0;
+  // The lens's distortion of the stored images (none by default); the renderer's camera
+  // is ideal and the generator bends its images through this lens.
+  LensDistortion distortion;
 };
 
 // What pass 2 changed of the objects that do not move, by instance id (sorted), and how

@@ -895,7 +895,9 @@ SimulatedFrame SimulatedSegmenter::SegmentWithTruth(const RgbdFrame& frame) {
   if (frame.index < 0) throw FileError(dir_, fmt::format("negative frame index {}", frame.index));
   const fs::path path = MaskPath(static_cast<size_t>(frame.index));
   if (!fs::exists(path)) throw FileError(path, "ground-truth mask is missing");
-  const cv::Mat ids = sequence_.LoadInstanceMask(path);
+  // As stored: a network segments the stored image; its masks are then read into the
+  // frame's geometry, as external masks are.
+  const cv::Mat ids = ReadInstanceMask(path);
   const cv::Size expected = !frame.color_bgr.empty()
                                 ? frame.color_bgr.size()
                                 : cv::Size(sequence_.camera().intrinsics.width,
@@ -923,7 +925,18 @@ SimulatedFrame SimulatedSegmenter::SegmentWithTruth(const RgbdFrame& frame) {
     ctx.own_image_speed_px_s = here->second.own_image_speed_px_s;
     context[id] = ctx;
   }
-  return SimulateSegmentation(options_, seed_, frame.index, ids, table_, context);
+  SimulatedFrame simulated = SimulateSegmentation(options_, seed_, frame.index, ids, table_, context);
+  if (sequence_.camera().distortion.IsZero()) return simulated;
+  SimulatedFrame loaded;
+  loaded.segmentation.frame_index = simulated.segmentation.frame_index;
+  for (size_t k = 0; k < simulated.segmentation.instances.size(); ++k) {
+    InstanceMask& instance = simulated.segmentation.instances[k];
+    instance.mask = sequence_.InstanceMaskAsLoaded(instance.mask);
+    if (cv::countNonZero(instance.mask) == 0) continue;  // All of it where the lens saw past the render.
+    loaded.segmentation.instances.push_back(std::move(instance));
+    loaded.gt_ids.push_back(simulated.gt_ids[k]);
+  }
+  return loaded;
 }
 
 FrameSegmentation SimulatedSegmenter::Segment(const RgbdFrame& frame) {

@@ -251,7 +251,10 @@ class SimulatedSegmenter : public Segmenter {
   SimulatedSegmenter(const SimulatedSegmenter&) = delete;
   SimulatedSegmenter& operator=(const SimulatedSegmenter&) = delete;
 
-  // Reads frame.index's ground-truth mask and degrades it. Throws segslam::Error naming
+  // Reads frame.index's ground-truth mask and degrades it. With a distorted camera it
+  // degrades the mask as stored, as a network segments the stored image (an object cut
+  // by the image border is truncated there, not where the undistorted frame ends), and
+  // returns the masks undistorted, in the frame's geometry. Throws segslam::Error naming
   // the mask file if it is missing, not 16-bit, of another size than the frame, or holds
   // an id not in instances.json, or if frame.index is out of range.
   FrameSegmentation Segment(const RgbdFrame& frame) override;

@@ -5,6 +5,7 @@
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/instances.h"
+#include "core/lens_distortion.h"
 #include "core/manifest.h"
 #include "core/pose.h"
 #include "core/tracks.h"
@@ -18,6 +19,7 @@
 #include <deque>
 #include <future>
 #include <map>
+#include <optional>
 #include <set>
 #include <thread>
 #include <unistd.h>
@@ -291,10 +293,11 @@ class DatasetGeneration {
                                      : std::nullopt),
         renderer_(world_, options.backend, options.render),
         sensor_(scenario.sensor, renderer_.intrinsics(), KindDefaultMaxDepth(world_), world_.camera.fps),
-        sequence_camera_{renderer_.intrinsics(), world_.camera.depth_factor},
+        sequence_camera_{renderer_.intrinsics(), world_.camera.depth_factor, world_.camera.distortion},
         threads_(options.encode_threads > 0 ? options.encode_threads
                                             : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()))) {
     summary_.gl_renderer = renderer_.gl_renderer();
+    if (!world_.camera.distortion.IsZero()) lens_.emplace(renderer_.intrinsics(), world_.camera.distortion);
   }
 
   GenerateSummary Run() {
@@ -355,12 +358,19 @@ class DatasetGeneration {
     }
   }
 
-  // Sensor noise on a rendered frame, its mask analysed and checked against the pass's
-  // instances, then its images written (or, with no writer, only encoded, to measure).
+  // A rendered frame bent through the lens (when the camera has one), then sensor noise on
+  // it, its mask analysed and checked against the pass's instances, then its images written
+  // (or, with no writer, only encoded, to measure).
   void FinishFrame(int pass_index, int i, const Eigen::Isometry3d& T_wc_previous, const Eigen::Isometry3d& T_wc,
                    const TumSequenceWriter* writer, const fs::path& pass_dir, const InstanceTable& instances,
                    RenderedFrame* frame, FrameRecord* record) const {
     const double stamp_s = record->stamp_s;
+    if (lens_) {
+      // Optics before the sensor: the noise lies on the stored pixels, as a real camera's.
+      if (!frame->color_bgr.empty()) frame->color_bgr = lens_->DistortColour(frame->color_bgr);
+      if (!frame->depth_m.empty()) frame->depth_m = lens_->DistortDepth(frame->depth_m);
+      if (!frame->instance_ids.empty()) frame->instance_ids = lens_->DistortIds(frame->instance_ids);
+    }
     sensor_.Apply(scenario_.seed, pass_index, i, T_wc_previous, T_wc, frame);
     record->instances = AnalyseMask(frame->instance_ids);
     const std::string name = TumSequenceWriter::StampName(stamp_s);
@@ -385,6 +395,7 @@ class DatasetGeneration {
   WorldRenderer renderer_;
   const SensorModel sensor_;
   const SequenceCamera sequence_camera_;
+  std::optional<ImageUndistorter> lens_;  // Only for a camera with distortion.
   const int threads_;
   GenerateSummary summary_;
 };

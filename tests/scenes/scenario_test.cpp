@@ -215,8 +215,34 @@ TEST(ScenarioTest, ApplyOverridesValidatesOnceAllAreSet) {
   EXPECT_EQ(s.city.moving_cars, 9);
 }
 
+// A lens: five coefficients, and one that keeps bending outwards over the whole image
+// (the generator bends every render through it and a run takes the bend out again).
+TEST(ScenarioTest, LensDistortionIsFiveCoefficientsThatCoverTheImage) {
+  const Scenario kinect = ParseScenario("kind: office\ncamera: {distortion: [0.2624, -0.9531, -0.0054, 0.0026, 1.1633]}\n",
+                                        "ok.yaml");
+  EXPECT_EQ(kinect.camera.distortion.k2, -0.9531);
+  EXPECT_EQ(kinect.camera.distortion.p1, -0.0054);
+  EXPECT_TRUE(ParseScenario("kind: office\n", "ok.yaml").camera.distortion.IsZero());
+  EXPECT_EQ(ParseError("camera: {distortion: [0.1, 0.2]}\n"),
+            "my.yaml: camera.distortion: expected a list of 5 numbers [k1, k2, p1, p2, k3]");
+  EXPECT_EQ(ParseError("camera: {distortion: [0, 0, 0, 0, 12]}\n"),
+            "my.yaml: camera.distortion: each value must be in [-10, 10] (got 12)");
+  // The office image's corners lie at normalised radius 0.76; with k3 = -1 the radius
+  // stops growing at 0.72: the lens would fold the corners back onto the image.
+  const std::string fold = ParseError("kind: office\ncamera: {distortion: [0, 0, 0, 0, -1]}\n");
+  EXPECT_NE(fold.find("my.yaml: camera.distortion: folds the image: its radial distortion stops growing at "
+                      "normalised radius 0.72"),
+            std::string::npos)
+      << fold;
+  // The same lens on a narrower view is fine.
+  EXPECT_EQ(ParseScenario("kind: office\ncamera: {fovy_deg: 40, distortion: [0, 0, 0, 0, -1]}\n", "ok.yaml")
+                .camera.distortion.k3,
+            -1);
+}
+
 TEST(ScenarioTest, ToYamlRoundTrips) {
   Scenario s = LoadScenario(ScenarioPath("office_walking_rpy.yaml"));
+  ApplyOverride(s, "camera.distortion", "[-0.28, 0.07, 0.0002, 0.00002, 0]");
   YAML::Emitter out;
   out << ScenarioToYaml(s);
   const Scenario back = ParseScenario(out.c_str(), "round.yaml");
@@ -224,6 +250,8 @@ TEST(ScenarioTest, ToYamlRoundTrips) {
   EXPECT_EQ(back.office.frames, s.office.frames);
   EXPECT_DOUBLE_EQ(back.camera.fovy_deg, s.camera.fovy_deg);
   EXPECT_DOUBLE_EQ(back.office.room_size_m[2], s.office.room_size_m[2]);
+  EXPECT_EQ(back.camera.distortion.k1, -0.28);
+  EXPECT_EQ(back.camera.distortion.p2, 0.00002);
   EXPECT_EQ(back.seed, s.seed);
 }
 

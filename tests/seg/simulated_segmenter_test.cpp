@@ -673,6 +673,38 @@ TEST_F(SimulatedSegmenterSequenceTest, OnlyFastMovingInstancesAreBlurredAway) {
   }
 }
 
+// With a distorted camera the ground truth is degraded as stored, as a network segments
+// the stored image, and the masks come back undistorted. Undistorted first, car 5 would
+// no longer touch the image border (the lens saw less than the pinhole frame shows
+// there), and its truncation would go unnoticed.
+TEST_F(SimulatedSegmenterSequenceTest, DistortedSequenceIsSegmentedAsStored) {
+  SequenceCamera camera = ReadCameraYaml(dir_ / "camera.yaml");
+  camera.distortion = {0.2624, -0.9531, -0.0054, 0.0026, 1.1633};  // TUM freiburg1
+  WriteCameraYaml(dir_ / "camera.yaml", camera);
+  const TumSequence sequence = TumSequence::Open(dir_);
+  const ImageUndistorter lens(camera.intrinsics, camera.distortion);
+  ASSERT_EQ(cv::countNonZero(sequence.LoadInstanceMask(dir_ / "masks" / (TumSequenceWriter::StampName(1.0) + ".png")).col(0) == 5), 0)
+      << "the undistorted car must have left the border for this test to mean something";
+
+  SimulatedSegmenterOptions truncated = Clean();
+  truncated.miss_truncated_prob = 0.9;
+  int border_car = 0, inner_car = 0;
+  for (std::uint64_t seed = 1; seed <= 25; ++seed) {
+    SimulatedSegmenter segmenter(dir_, truncated, seed);
+    for (int i = 0; i < kFrames; ++i) {
+      const SimulatedFrame f = segmenter.SegmentWithTruth(sequence.LoadFrame(i));
+      border_car += std::count(f.gt_ids.begin(), f.gt_ids.end(), 5);
+      for (size_t k = 0; k < f.gt_ids.size(); ++k) {
+        if (f.gt_ids[k] != 2) continue;
+        ++inner_car;
+        EXPECT_TRUE(SameMask(f.segmentation.instances[k].mask, lens.UndistortIds(GtMask(TestIds(i), 2))));
+      }
+    }
+  }
+  EXPECT_EQ(inner_car, 100);
+  EXPECT_LT(border_car, 50);
+}
+
 TEST_F(SimulatedSegmenterSequenceTest, BadMasksGiveClearErrors) {
   SimulatedSegmenter segmenter(dir_, Clean(), 5);
   const TumSequence sequence = TumSequence::Open(dir_);

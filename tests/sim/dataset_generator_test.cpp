@@ -5,6 +5,7 @@
 #include "core/camera.h"
 #include "core/image_io.h"
 #include "core/instances.h"
+#include "core/lens_distortion.h"
 #include "core/manifest.h"
 #include "core/pose.h"
 #include "core/tracks.h"
@@ -424,6 +425,43 @@ TEST(Determinism, SameScenarioGivesIdenticalBytes) {
   }
   EXPECT_TRUE(VerifyManifest(root / "a").empty());
   EXPECT_TRUE(VerifyManifest(root / "a" / "pass1").empty());
+  fs::remove_all(root);
+}
+
+// camera.distortion: every stored image is the ideal render bent through the lens, and
+// camera.yaml names the lens, so a run undistorts the frames again (core/lens_distortion.h).
+TEST(LensDistortion, StoredImagesAreTheRendersBentThroughTheLens) {
+  scenes::Scenario scenario =
+      scenes::LoadScenario(fs::path(SEGSLAM_SOURCE_DIR) / "scenarios/test/office_small.yaml");
+  scenes::ApplyOverride(scenario, "sensor.enabled", "false");  // No noise: images compare exactly.
+  const fs::path root = fs::temp_directory_path() / ("segslam_lens_" + std::to_string(::getpid()));
+  fs::remove_all(root);
+  sim::GenerateOptions options;
+  options.max_frames_per_pass = 3;
+  sim::GenerateDataset(scenario, root / "ideal", options);
+  scenes::ApplyOverride(scenario, "camera.distortion", "[0.2624, -0.9531, -0.0054, 0.0026, 1.1633]");
+  sim::GenerateDataset(scenario, root / "lens", options);
+
+  const TumSequence ideal = TumSequence::Open(root / "ideal" / "pass1");
+  const TumSequence bent = TumSequence::Open(root / "lens" / "pass1");
+  EXPECT_TRUE(ideal.camera().distortion.IsZero());
+  EXPECT_EQ(bent.camera().distortion.k1, 0.2624);
+  EXPECT_EQ(bent.camera().distortion.k3, 1.1633);
+  const ImageUndistorter lens(bent.camera().intrinsics, bent.camera().distortion);
+  ASSERT_EQ(ideal.size(), bent.size());
+  for (size_t i = 0; i < ideal.size(); ++i) {
+    const fs::path ideal_dir = ideal.dir(), bent_dir = bent.dir();
+    const TumFrameEntry& entry = ideal.entries()[i];
+    const std::string mask = "masks/" + fs::path(entry.rgb_file).filename().string();
+    const cv::Mat ideal_ids = ReadInstanceMask(ideal_dir / mask);
+    const cv::Mat bent_ids = ReadInstanceMask(bent_dir / mask);
+    EXPECT_EQ(cv::norm(ReadColorImage(bent_dir / entry.rgb_file),
+                       lens.DistortColour(ReadColorImage(ideal_dir / entry.rgb_file)), cv::NORM_INF), 0.0);
+    EXPECT_EQ(cv::norm(ReadDepthImage(bent_dir / entry.depth_file, 5000),
+                       lens.DistortDepth(ReadDepthImage(ideal_dir / entry.depth_file, 5000)), cv::NORM_INF), 0.0);
+    EXPECT_EQ(cv::norm(bent_ids, lens.DistortIds(ideal_ids), cv::NORM_INF), 0.0);
+    EXPECT_GT(cv::countNonZero(bent_ids != ideal_ids), 100) << "the lens bends the masks";
+  }
   fs::remove_all(root);
 }
 
