@@ -932,7 +932,8 @@ SimulatedFrame SimulatedSegmenter::SegmentWithTruth(const RgbdFrame& frame) {
   for (size_t k = 0; k < simulated.segmentation.instances.size(); ++k) {
     InstanceMask& instance = simulated.segmentation.instances[k];
     instance.mask = sequence_.InstanceMaskAsLoaded(instance.mask);
-    if (cv::countNonZero(instance.mask) == 0) continue;  // All of it where the lens saw past the render.
+    // Gone in the resampling: a sliver, or (barrel lens) all of it outside the pinhole frame.
+    if (cv::countNonZero(instance.mask) == 0) continue;
     loaded.segmentation.instances.push_back(std::move(instance));
     loaded.gt_ids.push_back(simulated.gt_ids[k]);
   }
