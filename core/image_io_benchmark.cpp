@@ -1,6 +1,7 @@
 // Speed of writing and reading a sequence's PNGs, per frame, on one core (run under
 // `taskset -c 0`). The generator encodes every frame once; every run over a dataset
-// decodes it again, so both sides count.
+// decodes it again, so both sides count. Also the lens undistortion that reading a
+// distorted camera's frames adds (TUM freiburg1's lens, 640x480 frames only).
 //
 //   core_benchmarks [--sequence DIR] [Google Benchmark flags]
 //
@@ -23,6 +24,7 @@
 
 #include "core/error.h"
 #include "core/image_io.h"
+#include "core/lens_distortion.h"
 #include "core/tum_dataset.h"
 
 namespace segslam {
@@ -145,6 +147,56 @@ void RegisterPngBenchmarks() {
         ->Unit(benchmark::kMillisecond);
   }
 }
+
+// TUM freiburg1's colour camera; its lens's maps are built once, outside the timings.
+const ImageUndistorter* Freiburg1Lens(benchmark::State& state) {
+  const cv::Mat& frame = Frames().color.front();
+  if (frame.cols != 640 || frame.rows != 480) {
+    state.SkipWithError("the lens benchmarks need 640x480 frames");
+    return nullptr;
+  }
+  static const SequenceCamera camera = *TumDefaultCamera("freiburg1");
+  static const ImageUndistorter lens(camera.intrinsics, camera.distortion);
+  return &lens;
+}
+
+template <typename Undistort>
+void UndistortEach(benchmark::State& state, const std::vector<cv::Mat>& images, Undistort undistort) {
+  cv::setNumThreads(1);
+  const ImageUndistorter* lens = Freiburg1Lens(state);
+  if (lens == nullptr) return;
+  size_t i = 0;
+  for (auto _ : state) {
+    const cv::Mat out = undistort(*lens, images[i++ % images.size()]);
+    benchmark::DoNotOptimize(out.data);
+  }
+  state.SetLabel(Frames().label);
+}
+
+void BM_UndistortColour(benchmark::State& state) {
+  UndistortEach(state, Frames().color, [](const ImageUndistorter& lens, const cv::Mat& image) {
+    return lens.UndistortColour(image);
+  });
+}
+BENCHMARK(BM_UndistortColour)->Unit(benchmark::kMillisecond);
+
+void BM_UndistortDepth(benchmark::State& state) {
+  UndistortEach(state, Frames().depth, [](const ImageUndistorter& lens, const cv::Mat& image) {
+    return lens.UndistortDepth(image);
+  });
+}
+BENCHMARK(BM_UndistortDepth)->Unit(benchmark::kMillisecond);
+
+// Once per sequence opened (TumSequence::Open), for a distorted camera.
+void BM_BuildUndistortionMaps(benchmark::State& state) {
+  cv::setNumThreads(1);
+  const SequenceCamera camera = *TumDefaultCamera("freiburg1");
+  for (auto _ : state) {
+    const ImageUndistorter lens(camera.intrinsics, camera.distortion);
+    benchmark::DoNotOptimize(&lens);
+  }
+}
+BENCHMARK(BM_BuildUndistortionMaps)->Unit(benchmark::kMillisecond);
 
 // Takes `--sequence DIR` (or `--sequence=DIR`) out of argv before Google Benchmark sees
 // it. Returns false, after printing why, on a missing value.
