@@ -1,5 +1,6 @@
 #include "core/lens_distortion.h"
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -15,6 +16,8 @@ namespace {
 // A stored pixel whose inverse does not re-distort to within this distance of itself lies
 // where the model folds over (outside the calibrated field); it gets no pinhole source.
 constexpr double kInverseToleranceNormalised = 1e-5;
+// A map entry far outside any image: the pixel has no source (0, or the border colour).
+constexpr float kNoSource = -1e6f;
 
 }  // namespace
 
@@ -60,18 +63,25 @@ ImageUndistorter::ImageUndistorter(const PinholeCamera& camera, const LensDistor
   if (!distortion.IsValid(&error)) throw Error("lens undistortion: " + error);
   const cv::Size size(camera.width, camera.height);
 
-  // Pinhole pixel -> stored pixel: the model itself.
+  // Pinhole pixel -> stored pixel: the model itself, where it still bends outwards (a
+  // polynomial fitted to a narrower field may fold back beyond that).
+  const double corner = std::hypot(std::max(camera.cx, camera.width - 1 - camera.cx) / camera.fx,
+                                   std::max(camera.cy, camera.height - 1 - camera.cy) / camera.fy);
+  const double growing = distortion.GrowingRadius(corner);
   undistort_map_x_.create(size, CV_32F);
   undistort_map_y_.create(size, CV_32F);
   for (int v = 0; v < size.height; ++v) {
     for (int u = 0; u < size.width; ++u) {
-      const cv::Vec2d d = distortion.Distort({(u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy});
-      undistort_map_x_.at<float>(v, u) = static_cast<float>(camera.fx * d[0] + camera.cx);
-      undistort_map_y_.at<float>(v, u) = static_cast<float>(camera.fy * d[1] + camera.cy);
+      const cv::Vec2d x((u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy);
+      const bool modelled = std::hypot(x[0], x[1]) <= growing;
+      const cv::Vec2d d = distortion.Distort(x);
+      undistort_map_x_.at<float>(v, u) = modelled ? static_cast<float>(camera.fx * d[0] + camera.cx) : kNoSource;
+      undistort_map_y_.at<float>(v, u) = modelled ? static_cast<float>(camera.fy * d[1] + camera.cy) : kNoSource;
     }
   }
 
-  // Stored pixel -> pinhole pixel: OpenCV's iterative inversion, checked by re-distorting.
+  // Stored pixel -> pinhole pixel: OpenCV's iterative inversion, checked by re-distorting
+  // (and by where the model holds: a folded lens has a second, false preimage).
   std::vector<cv::Point2d> stored;
   stored.reserve(static_cast<size_t>(size.area()));
   for (int v = 0; v < size.height; ++v) {
@@ -87,10 +97,11 @@ ImageUndistorter::ImageUndistorter(const PinholeCamera& camera, const LensDistor
     for (int u = 0; u < size.width; ++u, ++k) {
       const cv::Vec2d x(normalised[k].x, normalised[k].y);
       const cv::Vec2d back = distortion.Distort(x);
-      const bool inverted = std::hypot(back[0] - (u - camera.cx) / camera.fx,
-                                       back[1] - (v - camera.cy) / camera.fy) < kInverseToleranceNormalised;
-      distort_map_x_.at<float>(v, u) = inverted ? static_cast<float>(camera.fx * x[0] + camera.cx) : -1e6f;
-      distort_map_y_.at<float>(v, u) = inverted ? static_cast<float>(camera.fy * x[1] + camera.cy) : -1e6f;
+      const bool inverted = std::hypot(x[0], x[1]) <= growing &&
+                            std::hypot(back[0] - (u - camera.cx) / camera.fx, back[1] - (v - camera.cy) / camera.fy) <
+                                kInverseToleranceNormalised;
+      distort_map_x_.at<float>(v, u) = inverted ? static_cast<float>(camera.fx * x[0] + camera.cx) : kNoSource;
+      distort_map_y_.at<float>(v, u) = inverted ? static_cast<float>(camera.fy * x[1] + camera.cy) : kNoSource;
     }
   }
 }

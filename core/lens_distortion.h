@@ -52,7 +52,9 @@ struct LensDistortion {
 // Colour is interpolated bilinearly and the border replicated (no artificial edge for the
 // feature detector); depth and instance ids are taken from the nearest pixel (no blend of
 // two surfaces or two ids) and are 0 (no depth, background) where the source image has no
-// pixel.
+// pixel. Where the lens's radial bend stops growing (LensDistortion::GrowingRadius: its
+// polynomial was fitted to a narrower field), the model does not hold and pixels beyond
+// get no source either.
 class ImageUndistorter {
  public:
   // `camera` must be valid (PinholeCamera::IsValid) and `distortion` valid; throws

@@ -139,6 +139,29 @@ TEST(LensDistortionTest, DepthAndIdsKeepTheirValuesColourHasNoEdgeAtTheBorder) {
   EXPECT_EQ(cv::norm(undistorted_colour, colour, cv::NORM_INF), 0.0);  // Border replicated.
 }
 
+// k3 = -1 stops bending outwards at normalised radius 0.723, inside the corners of a
+// Kinect-like image (0.76), where it has bent a point to 0.62 at most: beyond, the model
+// folds back, and the pixels it would give are left empty rather than filled wrongly.
+TEST(LensDistortionTest, PixelsBeyondWhereTheLensFoldsStayEmpty) {
+  const PinholeCamera camera{640, 480, 525, 525, 319.5, 239.5};
+  const LensDistortion folding{0, 0, 0, 0, -1};
+  EXPECT_NEAR(folding.GrowingRadius(1.0), std::pow(1.0 / 7.0, 1.0 / 6.0), 1e-3);
+  EXPECT_EQ(Freiburg1Distortion().GrowingRadius(0.8), 0.8);  // Grows over the whole image.
+  const ImageUndistorter undistorter(camera, folding);
+  const cv::Mat ones(480, 640, CV_32F, cv::Scalar(1.0f));
+  // The pixel on the image's diagonal at normalised radius r.
+  auto at = [&](const cv::Mat& image, double r) {
+    const double d = r / std::hypot(319.5 / 525, 239.5 / 525);
+    return image.at<float>(static_cast<int>(std::lround(239.5 * (1 - d))), static_cast<int>(std::lround(319.5 * (1 - d))));
+  };
+  const cv::Mat undistorted = undistorter.UndistortDepth(ones);
+  EXPECT_EQ(at(undistorted, 0.70), 1.0f);  // modelled, bent to 0.62: inside the stored image
+  EXPECT_EQ(at(undistorted, 0.75), 0.0f);  // beyond the fold
+  const cv::Mat distorted = undistorter.DistortDepth(ones);
+  EXPECT_EQ(at(distorted, 0.60), 1.0f);    // the bend of a point at 0.64
+  EXPECT_EQ(at(distorted, 0.70), 0.0f);    // no point within the fold bends this far out
+}
+
 TEST(LensDistortionTest, NoDistortionLeavesImagesAsTheyAre) {
   const PinholeCamera camera{64, 48, 60, 60, 31.5, 23.5};
   const ImageUndistorter undistorter(camera, LensDistortion{});
