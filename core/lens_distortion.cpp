@@ -67,7 +67,8 @@ ImageUndistorter::ImageUndistorter(const PinholeCamera& camera, const LensDistor
   // polynomial fitted to a narrower field may fold back beyond that).
   const double corner = std::hypot(std::max(camera.cx, camera.width - 1 - camera.cx) / camera.fx,
                                    std::max(camera.cy, camera.height - 1 - camera.cy) / camera.fy);
-  const double growing = distortion.GrowingRadius(corner);
+  // Searched past the corners: a barrel lens's stored corners see points beyond them.
+  const double growing = distortion.GrowingRadius(4 * corner);
   undistort_map_x_.create(size, CV_32F);
   undistort_map_y_.create(size, CV_32F);
   for (int v = 0; v < size.height; ++v) {
