@@ -57,7 +57,7 @@ double LensDistortion::GrowingRadius(double limit) const {
 }
 
 ImageUndistorter::ImageUndistorter(const PinholeCamera& camera, const LensDistortion& distortion)
-    : camera_(camera), distortion_(distortion) {
+    : camera_(camera) {
   std::string error;
   if (!camera.IsValid(&error)) throw Error("lens undistortion: invalid camera: " + error);
   if (!distortion.IsValid(&error)) throw Error("lens undistortion: " + error);

@@ -72,16 +72,12 @@ class ImageUndistorter {
   cv::Mat DistortDepth(const cv::Mat& depth) const;
   cv::Mat DistortIds(const cv::Mat& ids) const;
 
-  const PinholeCamera& camera() const { return camera_; }
-  const LensDistortion& distortion() const { return distortion_; }
-
  private:
   enum class Resampling { kSmooth, kNearest };
   cv::Mat Remap(const cv::Mat& image, const cv::Mat& map_x, const cv::Mat& map_y,
                 Resampling resampling) const;
 
   PinholeCamera camera_;
-  LensDistortion distortion_;
   // For each pinhole pixel, the stored image's coordinates it samples (CV_32F each).
   cv::Mat undistort_map_x_, undistort_map_y_;
   // For each stored pixel, the pinhole image's coordinates it samples (CV_32F each).

@@ -98,10 +98,7 @@ class MaskSource {
     slam::FrameInstances instances;
     const fs::path path =
         sequence_.dir() / "masks" / (StemOf(sequence_, static_cast<size_t>(frame.index)).string() + ".png");
-    instances.ids = sequence_.LoadInstanceMask(path);
-    if (instances.ids.size() != frame.color_bgr.size()) {
-      throw FileError(path, "mask size differs from the frame's");
-    }
+    instances.ids = sequence_.LoadInstanceMask(path);  // Checks its size.
     CheckMaskIds(instances.ids, table_, path.string());
     instances.moveable_ids = moveable_;
     return instances;
@@ -189,7 +186,6 @@ SlamRunResult RunMutualLoop(const TumSequence& sequence, const SlamRunOptions& o
     if (score) {
       const fs::path gt_path = gt_masks_dir / (stem.string() + ".png");
       const cv::Mat gt_ids = sequence.LoadInstanceMask(gt_path);
-      if (gt_ids.size() != frame.color_bgr.size()) throw FileError(gt_path, "mask size differs from the frame's");
       raw_scores.AddFrame(gt_ids, gt_table, step.initial);
       refined_scores.AddFrame(gt_ids, gt_table, step.refined);
     }
