@@ -230,6 +230,33 @@ TEST_F(TumDatasetTest, DistortedSequenceIsReadUndistortedAndMasksWrittenBackAsSt
   EXPECT_NE(message.find("mask is 32x24, the sequence's images are 64x48"), std::string::npos) << message;
 }
 
+// A TUM freiburg1 sequence as downloaded (no camera.yaml) is read with TUM's calibration,
+// its lens included.
+TEST_F(TumDatasetTest, Freiburg1SequenceWithoutCameraYamlIsUndistorted) {
+  const auto seq_dir = dir() / "rgbd_dataset_freiburg1_xyz";
+  const SequenceCamera fr1 = *TumDefaultCamera("freiburg1");
+  cv::Mat stored_depth(480, 640, CV_32F);
+  cv::randu(stored_depth, 0.5, 4.0);
+  {
+    SequenceCamera pinhole = fr1;
+    pinhole.distortion = {};
+    TumSequenceWriter writer(seq_dir, pinhole);
+    RgbdFrame frame;
+    frame.stamp_s = 1305031102.175304;
+    frame.color_bgr = cv::Mat(480, 640, CV_8UC3, cv::Scalar(10, 20, 30));
+    frame.depth_m = stored_depth;
+    writer.Add(frame, Eigen::Isometry3d::Identity());
+    writer.Finish();
+  }
+  std::filesystem::remove(seq_dir / "camera.yaml");
+  const TumSequence sequence = TumSequence::Open(seq_dir);
+  EXPECT_EQ(sequence.camera().distortion.k1, 0.2624);
+  const cv::Mat stored = ReadDepthImage(seq_dir / sequence.entries()[0].depth_file, 5000);
+  EXPECT_EQ(cv::norm(sequence.LoadFrame(0).depth_m,
+                     ImageUndistorter(fr1.intrinsics, fr1.distortion).UndistortDepth(stored), cv::NORM_INF),
+            0.0);
+}
+
 TEST_F(TumDatasetTest, OpenErrors) {
   const auto seq_dir = dir() / "seq";
   {
