@@ -56,6 +56,11 @@ double LensDistortion::GrowingRadius(double limit) const {
   return limit;
 }
 
+double CornerRadius(const PinholeCamera& camera) {
+  return std::hypot(std::max(camera.cx, camera.width - 1 - camera.cx) / camera.fx,
+                    std::max(camera.cy, camera.height - 1 - camera.cy) / camera.fy);
+}
+
 ImageUndistorter::ImageUndistorter(const PinholeCamera& camera, const LensDistortion& distortion)
     : camera_(camera) {
   std::string error;
@@ -65,8 +70,7 @@ ImageUndistorter::ImageUndistorter(const PinholeCamera& camera, const LensDistor
 
   // Pinhole pixel -> stored pixel: the model itself, where it still bends outwards (a
   // polynomial fitted to a narrower field may fold back beyond that).
-  const double corner = std::hypot(std::max(camera.cx, camera.width - 1 - camera.cx) / camera.fx,
-                                   std::max(camera.cy, camera.height - 1 - camera.cy) / camera.fy);
+  const double corner = CornerRadius(camera);
   // Searched past the corners: a barrel lens's stored corners see points beyond them.
   const double growing = distortion.GrowingRadius(4 * corner);
   undistort_map_x_.create(size, CV_32F);

@@ -44,6 +44,10 @@ struct LensDistortion {
   double GrowingRadius(double limit) const;
 };
 
+// Normalised radius of the image corner (pixel centre) farthest from the principal point:
+// how far out a lens model must hold for this camera.
+double CornerRadius(const PinholeCamera& camera);
+
 // Resamples whole images between a distorted camera's stored geometry and the pinhole
 // geometry with the same intrinsics. Each direction's pixel map is built once (a few tens
 // of milliseconds at 640x480); a call then costs one cv::remap. Immutable after

@@ -5,6 +5,7 @@
 
 #include "core/camera.h"
 #include "core/error.h"
+#include "core/lens_distortion.h"
 
 #include <cmath>
 #include <fstream>
@@ -386,7 +387,7 @@ std::string KeyText(const YAML::Node& key) { return key.IsScalar() ? key.Scalar(
 void CheckLensCoversTheImage(const CameraSpec& camera, const std::string& origin) {
   if (camera.distortion.IsZero()) return;
   const PinholeCamera pinhole = PinholeCamera::FromVerticalFov(camera.width, camera.height, camera.fovy_deg);
-  const double corner = std::hypot(pinhole.cx / pinhole.fx, pinhole.cy / pinhole.fy);
+  const double corner = CornerRadius(pinhole);
   const double growing = camera.distortion.GrowingRadius(4 * corner);
   if (growing < corner || camera.distortion.DistortRadius(growing) < corner) {
     throw KeyError(origin, "camera.distortion",
