@@ -56,4 +56,43 @@ void WriteImageAtomically(const std::filesystem::path& path, const cv::Mat& imag
   WriteBytesAtomically(path, buffer.data(), buffer.size());
 }
 
+StagingDirectory::StagingDirectory(std::filesystem::path target, bool overwrite) : target_(std::move(target)) {
+  namespace fs = std::filesystem;
+  if (target_.filename().empty()) target_ = target_.parent_path();
+  if (fs::exists(target_) && !overwrite) {
+    throw FileError(target_, "already exists (use --force to replace it)");
+  }
+  const fs::path parent = target_.has_parent_path() ? target_.parent_path() : fs::path(".");
+  std::error_code error;
+  fs::create_directories(parent, error);
+  if (error) throw FileError(parent, "cannot create output directory: " + error.message());
+  staging_ = parent / ("." + target_.filename().string() + ".partial-" + std::to_string(::getpid()));
+  fs::remove_all(staging_, error);
+  if (!fs::create_directory(staging_, error) || error) {
+    throw FileError(target_, "cannot write here: " + (error ? error.message() : std::string("unknown reason")));
+  }
+}
+
+StagingDirectory::~StagingDirectory() {
+  if (!committed_) {
+    std::error_code ignored;
+    std::filesystem::remove_all(staging_, ignored);
+  }
+}
+
+void StagingDirectory::Commit() {
+  namespace fs = std::filesystem;
+  std::error_code error;
+  fs::path old;
+  if (fs::exists(target_)) {
+    old = target_.parent_path() / ("." + target_.filename().string() + ".old-" + std::to_string(::getpid()));
+    fs::rename(target_, old, error);
+    if (error) throw FileError(target_, "cannot replace: " + error.message());
+  }
+  fs::rename(staging_, target_, error);
+  if (error) throw FileError(target_, "cannot move the finished output here: " + error.message());
+  committed_ = true;
+  if (!old.empty()) fs::remove_all(old, error);
+}
+
 }  // namespace segslam

@@ -26,4 +26,29 @@ void WriteBytesAtomically(const std::filesystem::path& path, const void* data, s
 void WriteImageAtomically(const std::filesystem::path& path, const cv::Mat& image,
                           const std::vector<int>& params = {});
 
+// An output directory assembled under a hidden sibling name (".<name>.partial-<pid>") and
+// renamed into place only when complete: a failure, an exception or Ctrl-C leaves
+// nothing that looks like a finished output. The destructor removes an uncommitted
+// staging directory.
+class StagingDirectory {
+ public:
+  // Throws segslam::Error (naming `target`) if it exists and `overwrite` is false, or if
+  // the staging directory cannot be made.
+  StagingDirectory(std::filesystem::path target, bool overwrite);
+  StagingDirectory(const StagingDirectory&) = delete;
+  StagingDirectory& operator=(const StagingDirectory&) = delete;
+  ~StagingDirectory();
+
+  // Where to write the output until Commit().
+  const std::filesystem::path& path() const { return staging_; }
+
+  // Moves the finished directory to its target, replacing an old one if present.
+  void Commit();
+
+ private:
+  std::filesystem::path target_;
+  std::filesystem::path staging_;
+  bool committed_ = false;
+};
+
 }  // namespace segslam

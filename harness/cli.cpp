@@ -30,6 +30,7 @@ int RunCli(int argc, char** argv) {
   AddEvalCommand(app, &action);
   AddScenarioCommand(app, &action);
   AddSweepCommand(app, &action);
+  AddMasksCommand(app, &action);
 
   try {
     app.parse(argc, argv);

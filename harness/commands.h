@@ -17,6 +17,7 @@ void AddRunCommand(CLI::App& app, std::function<int()>* action);
 void AddEvalCommand(CLI::App& app, std::function<int()>* action);
 void AddScenarioCommand(CLI::App& app, std::function<int()>* action);
 void AddSweepCommand(CLI::App& app, std::function<int()>* action);
+void AddMasksCommand(CLI::App& app, std::function<int()>* action);
 // `scenario suite`, added under the `scenario` subcommand by AddScenarioCommand.
 void AddSuiteCommand(CLI::App& scenario, std::function<int()>* action);
 

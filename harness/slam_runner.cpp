@@ -113,17 +113,6 @@ class MaskSource {
 
 // A frame's refined masks in the external-mask layout (seg/external_masks.h), on the
 // sequence's stored images, so a later run or seg-eval can read them back with --masks.
-void WriteMasksInExternalLayout(const fs::path& dir, const fs::path& stem, const seg::FrameSegmentation& masks,
-                                const TumSequence& sequence, cv::Size size) {
-  WriteInstanceMask(dir / (stem.string() + ".png"), sequence.InstanceMaskAsStored(masks.ToIdImage(size)));
-  nlohmann::json table = {{"instances", nlohmann::json::array()}};
-  for (const seg::InstanceMask& instance : masks.instances) {
-    table["instances"].push_back(
-        {{"id", instance.track_id}, {"category_id", instance.category_id}, {"score", instance.score}});
-  }
-  WriteFileAtomically(dir / (stem.string() + ".json"), table.dump() + "\n");
-}
-
 double Median(std::vector<double> values) {
   if (values.empty()) return 0;
   std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2), values.end());
@@ -190,7 +179,9 @@ SlamRunResult RunMutualLoop(const TumSequence& sequence, const SlamRunOptions& o
       refined_scores.AddFrame(gt_ids, gt_table, step.refined);
     }
     if (!options.refined_masks_dir.empty()) {
-      WriteMasksInExternalLayout(options.refined_masks_dir, stem, step.refined, sequence, frame.color_bgr.size());
+      seg::WriteExternalMaskFiles(options.refined_masks_dir, stem.string(),
+                                  sequence.InstanceMaskAsStored(step.refined.ToIdImage(frame.color_bgr.size())),
+                                  step.refined);
     }
     if (options.on_frame) options.on_frame(i + 1, total);
   }

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include "core/atomic_file.h"
 #include "core/coco.h"
 #include "core/error.h"
 #include "core/image_io.h"
@@ -135,6 +136,17 @@ FrameSegmentation ExternalMasksToSegmentation(
     segmentation.instances.push_back(std::move(instance));
   }
   return segmentation;
+}
+
+void WriteExternalMaskFiles(const fs::path& dir, const std::string& stem, const cv::Mat& stored_ids,
+                            const FrameSegmentation& masks) {
+  WriteInstanceMask(dir / (stem + ".png"), stored_ids);
+  nlohmann::json table = {{"instances", nlohmann::json::array()}};
+  for (const InstanceMask& instance : masks.instances) {
+    table["instances"].push_back(
+        {{"id", instance.track_id}, {"category_id", instance.category_id}, {"score", instance.score}});
+  }
+  WriteFileAtomically(dir / (stem + ".json"), table.dump() + "\n");
 }
 
 ExternalMaskSegmenter::ExternalMaskSegmenter(const fs::path& dir, const TumSequence& sequence)

@@ -49,6 +49,12 @@ FrameSegmentation ExternalMasksToSegmentation(
     const cv::Mat& ids, const std::map<std::uint16_t, ExternalDetection>& table,
     cv::Size frame_size, int frame_index, const std::string& origin);
 
+// Writes one frame's masks in the layout above, each file atomically: <dir>/<stem>.png,
+// the id image `stored_ids` (CV_16UC1, on the stored images), and <dir>/<stem>.json, the
+// class table of `masks`' instances (their track ids, categories and scores).
+void WriteExternalMaskFiles(const std::filesystem::path& dir, const std::string& stem, const cv::Mat& stored_ids,
+                            const FrameSegmentation& masks);
+
 // Reads the masks of a sequence's frames from a folder. Not copyable.
 class ExternalMaskSegmenter : public Segmenter {
  public:

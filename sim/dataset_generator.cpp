@@ -22,7 +22,6 @@
 #include <optional>
 #include <set>
 #include <thread>
-#include <unistd.h>
 
 namespace segslam::sim {
 namespace {
@@ -33,60 +32,6 @@ using Clock = std::chrono::steady_clock;
 double SecondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
-
-// The output is assembled in a hidden sibling directory and renamed into place only
-// when complete; if anything throws, the destructor removes the partial directory.
-class StagingDirectory {
- public:
-  StagingDirectory(fs::path target, bool overwrite) : target_(std::move(target)) {
-    if (target_.filename().empty()) target_ = target_.parent_path();
-    if (fs::exists(target_) && !overwrite) {
-      throw FileError(target_, "already exists (use --force to replace it)");
-    }
-    const fs::path parent = target_.has_parent_path() ? target_.parent_path() : fs::path(".");
-    std::error_code error;
-    fs::create_directories(parent, error);
-    if (error) throw FileError(parent, "cannot create output directory: " + error.message());
-    staging_ = parent / ("." + target_.filename().string() + ".partial-" +
-                         std::to_string(::getpid()));
-    fs::remove_all(staging_, error);
-    if (!fs::create_directory(staging_, error) || error) {
-      throw FileError(target_, "cannot write here: " +
-                                   (error ? error.message() : std::string("unknown reason")));
-    }
-  }
-  StagingDirectory(const StagingDirectory&) = delete;
-  StagingDirectory& operator=(const StagingDirectory&) = delete;
-  ~StagingDirectory() {
-    if (!committed_) {
-      std::error_code ignored;
-      fs::remove_all(staging_, ignored);
-    }
-  }
-
-  const fs::path& path() const { return staging_; }
-
-  // Moves the finished directory to its target, replacing an old one if present.
-  void Commit() {
-    std::error_code error;
-    fs::path old;
-    if (fs::exists(target_)) {
-      old = target_.parent_path() / ("." + target_.filename().string() + ".old-" +
-                                     std::to_string(::getpid()));
-      fs::rename(target_, old, error);
-      if (error) throw FileError(target_, "cannot replace: " + error.message());
-    }
-    fs::rename(staging_, target_, error);
-    if (error) throw FileError(target_, "cannot move the finished dataset here: " + error.message());
-    committed_ = true;
-    if (!old.empty()) fs::remove_all(old, error);
-  }
-
- private:
-  fs::path target_;
-  fs::path staging_;
-  bool committed_ = false;
-};
 
 // What one frame's mask says about each instance in it.
 struct InstanceInFrame {

@@ -1,0 +1,155 @@
+// `segslam masks images` and `segslam masks import` on a generated sequence (fixture
+// sim_datasets): the ground-truth masks, sent through the way a network's output comes
+// (an image list, a COCO results file with compressed RLE and integer image ids), come
+// back as the same masks, which seg-eval then scores as perfect; refused input and an
+// existing folder leave nothing behind.
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <string>
+
+#include "core/coco_rle.h"
+#include "tests/harness/cli_runner.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using segslam::testing::CommandOutput;
+using segslam::testing::ReadText;
+
+const fs::path kDataDir = SEGSLAM_TEST_DATA_DIR;
+
+class MasksCliTest : public segslam::testing::CliScratchTest {
+ protected:
+  MasksCliTest() : CliScratchTest("segslam_masks_") {}
+
+  const fs::path sequence_ = kDataDir / "office_clean" / "pass1";
+};
+
+// The ground truth of `sequence` as a network's results for the images of `image_list`.
+json GroundTruthAsResults(const fs::path& sequence, const json& image_list) {
+  const json instances = json::parse(ReadText(sequence / "instances.json"));
+  std::map<int, int> category_of;
+  for (const json& instance : instances.at("instances")) {
+    category_of[instance.at("id").get<int>()] = instance.at("category_id").get<int>();
+  }
+  json results = json::array();
+  for (const json& image : image_list.at("images")) {
+    const fs::path mask_file = sequence / "masks" / fs::path(image.at("file_name").get<std::string>()).filename();
+    const cv::Mat ids = cv::imread(mask_file.string(), cv::IMREAD_UNCHANGED);
+    std::map<int, bool> seen;
+    for (auto it = ids.begin<std::uint16_t>(); it != ids.end<std::uint16_t>(); ++it) {
+      if (*it != 0) seen[*it] = true;
+    }
+    for (const auto& [id, unused] : seen) {
+      const cv::Mat mask = ids == id;
+      results.push_back({{"image_id", image.at("id")},
+                         {"category_id", category_of.at(id)},
+                         {"segmentation",
+                          {{"size", {ids.rows, ids.cols}},
+                           {"counts", segslam::EncodeCocoRleString(segslam::CocoRleCounts(mask))}}},
+                         {"score", 0.5 + 0.4 * (id % 2)}});
+    }
+  }
+  return results;
+}
+
+TEST_F(MasksCliTest, GroundTruthThroughAResultsFileComesBackAsItWas) {
+  ASSERT_TRUE(fs::is_directory(sequence_)) << sequence_;
+  const fs::path images_file = dir_ / "images.json";
+  const CommandOutput listed = Run("masks images " + sequence_.string() + " --out " + images_file.string());
+  ASSERT_EQ(listed.exit_code, 0) << listed.stderr_text;
+  const json images = json::parse(ReadText(images_file));
+  ASSERT_EQ(images.at("images").size(), 40u);
+  EXPECT_EQ(images.at("images")[0].at("id"), 1);
+  EXPECT_EQ(images.at("images")[0].at("file_name").get<std::string>().rfind("rgb/", 0), 0u);
+  EXPECT_EQ(images.at("categories").size(), 80u);
+
+  const fs::path results_file = dir_ / "results.json";
+  std::ofstream(results_file) << GroundTruthAsResults(sequence_, images).dump();
+  const fs::path masks = dir_ / "masks";
+  const CommandOutput imported = Run("masks import " + sequence_.string() + " " + results_file.string() +
+                                     " --images " + images_file.string() + " --out " + masks.string() +
+                                     " --min-score 0 -q");
+  ASSERT_EQ(imported.exit_code, 0) << imported.stderr_text;
+  EXPECT_NE(imported.stdout_text.find("frames with a kept detection"), std::string::npos) << imported.stdout_text;
+
+  // Each written mask partitions the image exactly as the ground truth does.
+  for (const json& image : images.at("images")) {
+    const std::string name = fs::path(image.at("file_name").get<std::string>()).filename().string();
+    const cv::Mat truth = cv::imread((sequence_ / "masks" / name).string(), cv::IMREAD_UNCHANGED);
+    const cv::Mat written = cv::imread((masks / name).string(), cv::IMREAD_UNCHANGED);
+    ASSERT_EQ(written.type(), CV_16UC1) << name;
+    ASSERT_EQ(written.size(), truth.size()) << name;
+    std::map<int, int> truth_of_written, written_of_truth;
+    bool same_partition = true;
+    for (int y = 0; y < truth.rows; ++y) {
+      for (int x = 0; x < truth.cols; ++x) {
+        const int t = truth.at<std::uint16_t>(y, x), w = written.at<std::uint16_t>(y, x);
+        same_partition = same_partition && truth_of_written.emplace(w, t).first->second == t &&
+                         written_of_truth.emplace(t, w).first->second == w;
+      }
+    }
+    EXPECT_TRUE(same_partition) << name;
+    EXPECT_EQ(truth_of_written.count(0) ? truth_of_written.at(0) : 0, 0) << name;
+  }
+
+  // As a segmenter's output they are perfect: seg-eval reads them and scores raw mAP 1.
+  const CommandOutput scored =
+      Run("seg-eval " + sequence_.string() + " --masks " + masks.string() + " --out " + (dir_ / "eval").string());
+  ASSERT_EQ(scored.exit_code, 0) << scored.stderr_text;
+  const json eval = json::parse(ReadText(dir_ / "eval" / "seg_eval.json"));
+  EXPECT_DOUBLE_EQ(eval.at("sequences")[0].at("raw").at("mAP").get<double>(), 1.0);
+  EXPECT_DOUBLE_EQ(eval.at("sequences")[0].at("raw").at("mIoU").get<double>(), 1.0);
+
+  // The folder exists now: without --force it is kept as it is.
+  const CommandOutput again = Run("masks import " + sequence_.string() + " " + results_file.string() + " --images " +
+                                  images_file.string() + " --out " + masks.string() + " -q");
+  EXPECT_EQ(again.exit_code, 1);
+  EXPECT_NE(again.stderr_text.find("already exists (use --force to replace it)"), std::string::npos)
+      << again.stderr_text;
+  const CommandOutput forced = Run("masks import " + sequence_.string() + " " + results_file.string() +
+                                   " --images " + images_file.string() + " --out " + masks.string() +
+                                   " --min-score 0.7 --force -q");
+  ASSERT_EQ(forced.exit_code, 0) << forced.stderr_text;
+  EXPECT_NE(forced.stdout_text.find("scoring below 0.7"), std::string::npos) << forced.stdout_text;
+}
+
+TEST_F(MasksCliTest, RefusedInputLeavesNoFolder) {
+  ASSERT_TRUE(fs::is_directory(sequence_)) << sequence_;
+  // Integer image ids without the image list they refer to.
+  const fs::path results_file = dir_ / "results.json";
+  std::ofstream(results_file) << R"([{"image_id": 1, "category_id": 1, "score": 0.9,
+                                      "segmentation": {"size": [480, 640], "counts": "0"}}])";
+  const fs::path masks = dir_ / "masks";
+  const CommandOutput refused =
+      Run("masks import " + sequence_.string() + " " + results_file.string() + " --out " + masks.string());
+  EXPECT_EQ(refused.exit_code, 1);
+  EXPECT_NE(refused.stderr_text.find(results_file.string() + ": detection 0 (image_id 1): an integer image_id needs"),
+            std::string::npos)
+      << refused.stderr_text;
+  EXPECT_FALSE(fs::exists(masks));
+
+  // A mask that does not cover the image is found while writing the last frame: the
+  // folder with the 39 frames before it goes.
+  std::ofstream(results_file) << R"([{"image_id": 40, "category_id": 1, "score": 0.9,
+                                      "segmentation": {"size": [480, 640], "counts": "0"}}])";
+  const CommandOutput images = Run("masks images " + sequence_.string() + " --out " + (dir_ / "images.json").string());
+  ASSERT_EQ(images.exit_code, 0) << images.stderr_text;
+  const CommandOutput short_counts = Run("masks import " + sequence_.string() + " " + results_file.string() +
+                                         " --images " + (dir_ / "images.json").string() + " --out " + masks.string());
+  EXPECT_EQ(short_counts.exit_code, 1);
+  EXPECT_NE(short_counts.stderr_text.find("RLE counts cover 0 pixels, a 640x480 mask has 307200"), std::string::npos)
+      << short_counts.stderr_text;
+  EXPECT_FALSE(fs::exists(masks));
+  for (const auto& entry : fs::directory_iterator(dir_)) {
+    EXPECT_EQ(entry.path().filename().string().find(".masks.partial"), std::string::npos) << entry.path();
+  }
+}
+
+}  // namespace
