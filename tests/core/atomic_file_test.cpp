@@ -86,5 +86,33 @@ TEST_F(AtomicFileTest, WriteImageAtomically) {
   EXPECT_EQ(CountFiles(dir()), 1u);
 }
 
+// A staged folder appears under its name only when committed, replacing an old one; an
+// uncommitted one (an error, Ctrl-C) leaves nothing behind.
+TEST_F(AtomicFileTest, StagingDirectoryAppearsOnlyWhenCommitted) {
+  const auto target = dir() / "out";
+  {
+    StagingDirectory staging(target, false);
+    WriteFileAtomically(staging.path() / "a.txt", "first");
+    EXPECT_FALSE(std::filesystem::exists(target));
+  }
+  EXPECT_FALSE(std::filesystem::exists(target));
+  EXPECT_EQ(CountFiles(dir()), 0u);
+
+  StagingDirectory first(target, false);
+  WriteFileAtomically(first.path() / "a.txt", "first");
+  first.Commit();
+  EXPECT_EQ(ReadAll(target / "a.txt"), "first");
+
+  const std::string refused = testing::ErrorMessage([&] { StagingDirectory again(target, false); });
+  EXPECT_NE(refused.find(target.string() + ": already exists (use --force to replace it)"), std::string::npos)
+      << refused;
+  StagingDirectory second(target, true);
+  WriteFileAtomically(second.path() / "b.txt", "second");
+  second.Commit();
+  EXPECT_FALSE(std::filesystem::exists(target / "a.txt"));
+  EXPECT_EQ(ReadAll(target / "b.txt"), "second");
+  EXPECT_EQ(CountFiles(dir()), 1u);  // no staging or old folder left
+}
+
 }  // namespace
 }  // namespace segslam

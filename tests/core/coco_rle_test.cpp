@@ -3,26 +3,17 @@
 // malformed input refused with the origin in the message.
 #include "core/coco_rle.h"
 
-#include <functional>
 #include <random>
 
 #include <gtest/gtest.h>
 
 #include "core/error.h"
+#include "tests/core/test_util.h"
 
 namespace segslam {
 namespace {
 
 using Counts = std::vector<std::uint32_t>;
-
-std::string ErrorOf(const std::function<void()>& action) {
-  try {
-    action();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "";
-}
 
 // Each string below by hand: a count (from the fourth on, less the count two before it)
 // in 5-bit groups, least significant first; character = 48 + group (+32 if more follow).
@@ -57,14 +48,14 @@ TEST(CocoRleStringTest, RoundTripsLargeAndFallingCounts) {
 }
 
 TEST(CocoRleStringTest, MalformedStringsNameTheOriginAndTheProblem) {
-  EXPECT_NE(ErrorOf([] { DecodeCocoRleString("0T", "det.json: detection 4"); }).find("det.json: detection 4: "),
+  EXPECT_NE(testing::ErrorMessage([] { DecodeCocoRleString("0T", "det.json: detection 4"); }).find("det.json: detection 4: "),
             std::string::npos);
-  EXPECT_NE(ErrorOf([] { DecodeCocoRleString("0T", "o"); }).find("cut short"), std::string::npos);
-  EXPECT_NE(ErrorOf([] { DecodeCocoRleString("12~", "o"); }).find("'~' at position 2"), std::string::npos);
+  EXPECT_NE(testing::ErrorMessage([] { DecodeCocoRleString("0T", "o"); }).find("cut short"), std::string::npos);
+  EXPECT_NE(testing::ErrorMessage([] { DecodeCocoRleString("12~", "o"); }).find("'~' at position 2"), std::string::npos);
   // After 5, 2, 3: 'L' is group 28, the sign bit set, i.e. -4, and 2 - 4 = -2 pixels.
-  EXPECT_NE(ErrorOf([] { DecodeCocoRleString("523L", "o"); }).find("count 3 decodes to -2, outside 0..2^32-1"),
+  EXPECT_NE(testing::ErrorMessage([] { DecodeCocoRleString("523L", "o"); }).find("count 3 decodes to -2, outside 0..2^32-1"),
             std::string::npos);
-  EXPECT_NE(ErrorOf([] { DecodeCocoRleString(std::string(13, 'P'), "o"); }).find("longer than 12"),
+  EXPECT_NE(testing::ErrorMessage([] { DecodeCocoRleString(std::string(13, 'P'), "o"); }).find("longer than 12"),
             std::string::npos);
 }
 
@@ -100,7 +91,7 @@ TEST(CocoRleMaskTest, RandomMasksRoundTrip) {
 }
 
 TEST(CocoRleMaskTest, CountsThatDoNotCoverTheImageAreRefused) {
-  const std::string error = ErrorOf([] { CocoRleToMask({3, 2}, cv::Size(4, 3), "det.json: detection 2"); });
+  const std::string error = testing::ErrorMessage([] { CocoRleToMask({3, 2}, cv::Size(4, 3), "det.json: detection 2"); });
   EXPECT_NE(error.find("det.json: detection 2: RLE counts cover 5 pixels, a 4x3 mask has 12"), std::string::npos)
       << error;
 }
@@ -150,7 +141,7 @@ TEST(CocoSegmentationTest, DecodesEveryEncoding) {
 TEST(CocoSegmentationTest, MalformedValuesNameTheOrigin) {
   const cv::Size size(5, 6);
   auto error_of = [&](const nlohmann::json& segmentation) {
-    return ErrorOf([&] { DecodeCocoSegmentation(segmentation, size, "r.json: detection 1"); });
+    return testing::ErrorMessage([&] { DecodeCocoSegmentation(segmentation, size, "r.json: detection 1"); });
   };
   EXPECT_NE(error_of({{"size", {480, 640}}, {"counts", "0"}}).find("RLE size [480, 640] (height, width) is not the "
                                                                     "image's [6, 5]"),

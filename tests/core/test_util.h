@@ -1,4 +1,5 @@
-// Helpers shared by the core tests: a scratch directory removed after each test.
+// Helpers shared by the tests: a scratch directory removed after each test, error
+// messages, a small hand-made sequence.
 #pragma once
 
 #include <unistd.h>
@@ -7,6 +8,8 @@
 #include <string>
 
 #include <gtest/gtest.h>
+
+#include "core/tum_dataset.h"
 
 namespace segslam::testing {
 
@@ -39,6 +42,25 @@ std::string ErrorMessage(Fn&& fn) {
   }
   ADD_FAILURE() << "expected an exception";
   return "";
+}
+
+// Writes a TUM sequence of `frames` frames (one grey colour, depth 2 m everywhere, the
+// camera still) with stamps first_stamp_s + i * period_s into `dir`, and opens it.
+inline TumSequence WriteFlatSequence(const std::filesystem::path& dir, int width, int height, int frames,
+                                     double first_stamp_s, double period_s) {
+  SequenceCamera camera;
+  camera.intrinsics = PinholeCamera::FromVerticalFov(width, height, 60);
+  TumSequenceWriter writer(dir, camera);
+  for (int i = 0; i < frames; ++i) {
+    RgbdFrame frame;
+    frame.index = i;
+    frame.stamp_s = first_stamp_s + period_s * i;
+    frame.color_bgr = cv::Mat(height, width, CV_8UC3, cv::Scalar(90, 90, 90));
+    frame.depth_m = cv::Mat(height, width, CV_32F, cv::Scalar(2.0f));
+    writer.Add(frame, Eigen::Isometry3d::Identity());
+  }
+  writer.Finish();
+  return TumSequence::Open(dir);
 }
 
 inline std::filesystem::path SharedDataDir() { return SEGSLAM_SHARED_DATA_DIR; }

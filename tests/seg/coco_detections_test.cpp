@@ -3,8 +3,6 @@
 // the written folder read back by ExternalMaskSegmenter, and every kind of bad input.
 #include "seg/coco_detections.h"
 
-#include <unistd.h>
-
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -16,6 +14,7 @@
 #include "core/coco_rle.h"
 #include "core/error.h"
 #include "seg/external_masks.h"
+#include "tests/core/test_util.h"
 
 namespace segslam::seg {
 namespace {
@@ -27,28 +26,12 @@ constexpr int kWidth = 40;
 constexpr int kHeight = 30;
 constexpr int kFrames = 3;
 
-class CocoDetectionsTest : public ::testing::Test {
+class CocoDetectionsTest : public testing::TempDirTest {
  protected:
   void SetUp() override {
-    root_ = fs::temp_directory_path() /
-            ("segslam_coco_" + std::to_string(::getpid()) + "_" +
-             ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(root_);
-    SequenceCamera camera;
-    camera.intrinsics = PinholeCamera::FromVerticalFov(kWidth, kHeight, 60);
-    TumSequenceWriter writer(root_ / "seq", camera);
-    for (int i = 0; i < kFrames; ++i) {
-      RgbdFrame frame;
-      frame.index = i;
-      frame.stamp_s = 20.0 + 0.25 * i;
-      frame.color_bgr = cv::Mat(kHeight, kWidth, CV_8UC3, cv::Scalar(9, 9, 9));
-      frame.depth_m = cv::Mat(kHeight, kWidth, CV_32F, cv::Scalar(2.0f));
-      writer.Add(frame, Eigen::Isometry3d::Identity());
-    }
-    writer.Finish();
-    sequence_ = TumSequence::Open(root_ / "seq");
+    TempDirTest::SetUp();
+    sequence_ = testing::WriteFlatSequence(dir() / "seq", kWidth, kHeight, kFrames, 20.0, 0.25);
   }
-  void TearDown() override { fs::remove_all(root_); }
 
   std::string Stem(int i) const { return TumSequenceWriter::StampName(20.0 + 0.25 * i); }
 
@@ -61,20 +44,14 @@ class CocoDetectionsTest : public ::testing::Test {
     return {{"size", {kHeight, kWidth}}, {"counts", EncodeCocoRleString(CocoRleCounts(mask))}};
   }
   fs::path Write(const std::string& name, const json& content) const {
-    const fs::path path = root_ / name;
+    const fs::path path = dir() / name;
     std::ofstream(path) << content.dump();
     return path;
   }
   std::string ReadError(const fs::path& file, const CocoImportOptions& options = {}) const {
-    try {
-      CocoDetections::Read(file, sequence_, options);
-    } catch (const Error& e) {
-      return e.what();
-    }
-    return "(no error)";
+    return testing::ErrorMessage([&] { CocoDetections::Read(file, sequence_, options); });
   }
 
-  fs::path root_;
   TumSequence sequence_;
 };
 
@@ -117,7 +94,7 @@ TEST_F(CocoDetectionsTest, ResultsListWithStemImageIds) {
   // A lower threshold keeps the car.
   CocoImportOptions all;
   all.min_score = 0.0;
-  EXPECT_EQ(CocoDetections::Read(root_ / "results.json", sequence_, all).Frame(1).instances.size(), 3u);
+  EXPECT_EQ(CocoDetections::Read(dir() / "results.json", sequence_, all).Frame(1).instances.size(), 3u);
 }
 
 // Integer image ids through an image list (what `segslam masks images` writes), its
@@ -190,7 +167,7 @@ TEST_F(CocoDetectionsTest, WrittenFolderReadsBack) {
       {{"image_id", Stem(0)}, {"category_id", 44}, {"segmentation", CompressedRle(Box({9, 11, 2, 2}))}, {"score", 0.8}},
   });
   const CocoDetections detections = CocoDetections::Read(Write("results.json", results), sequence_, {});
-  const fs::path folder = root_ / "masks";
+  const fs::path folder = dir() / "masks";
   fs::create_directories(folder);
   for (int i = 0; i < kFrames; ++i) {
     const FrameSegmentation masks = detections.Frame(static_cast<size_t>(i));
@@ -229,9 +206,9 @@ TEST_F(CocoDetectionsTest, BadInputIsNamed) {
             std::string::npos);
   EXPECT_NE(ReadError(Write("object.json", {{"images", json::array()}})).find("expected a COCO results list"),
             std::string::npos);
-  std::ofstream(root_ / "broken.json") << "[{\"image_id\": ";
-  EXPECT_NE(ReadError(root_ / "broken.json").find("broken.json"), std::string::npos);
-  EXPECT_NE(ReadError(root_ / "absent.json").find("absent.json"), std::string::npos);
+  std::ofstream(dir() / "broken.json") << "[{\"image_id\": ";
+  EXPECT_NE(ReadError(dir() / "broken.json").find("broken.json"), std::string::npos);
+  EXPECT_NE(ReadError(dir() / "absent.json").find("absent.json"), std::string::npos);
 
   // Every detection on images this sequence does not have: the wrong file.
   json foreign = json::array({good});
@@ -243,15 +220,11 @@ TEST_F(CocoDetectionsTest, BadInputIsNamed) {
   json other_size = json::array({good});
   other_size[0]["segmentation"]["size"] = {480, 640};
   const CocoDetections detections = CocoDetections::Read(Write("size.json", other_size), sequence_, {});
-  try {
-    detections.Frame(0);
-    ADD_FAILURE() << "expected an error";
-  } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("size.json: detection 0 (image_id " + Stem(0) +
-                                         "): RLE size [480, 640] (height, width) is not the image's [30, 40]"),
-              std::string::npos)
-        << e.what();
-  }
+  const std::string error = testing::ErrorMessage([&] { detections.Frame(0); });
+  EXPECT_NE(error.find("size.json: detection 0 (image_id " + Stem(0) +
+                       "): RLE size [480, 640] (height, width) is not the image's [30, 40]"),
+            std::string::npos)
+      << error;
 }
 
 }  // namespace

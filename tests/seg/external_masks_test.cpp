@@ -14,6 +14,7 @@
 
 #include "core/error.h"
 #include "core/image_io.h"
+#include "tests/core/test_util.h"
 
 namespace segslam::seg {
 namespace {
@@ -31,19 +32,7 @@ class ExternalMasksTest : public ::testing::Test {
     root_ = fs::temp_directory_path() /
             ("segslam_ext_" + std::to_string(::getpid()) + "_" + info->name());
     fs::remove_all(root_);
-    SequenceCamera camera;
-    camera.intrinsics = PinholeCamera::FromVerticalFov(kWidth, kHeight, 60);
-    TumSequenceWriter writer(root_ / "seq", camera);
-    for (int i = 0; i < kFrames; ++i) {
-      RgbdFrame frame;
-      frame.index = i;
-      frame.stamp_s = 10.0 + 0.5 * i;
-      frame.color_bgr = cv::Mat(kHeight, kWidth, CV_8UC3, cv::Scalar(1, 2, 3));
-      frame.depth_m = cv::Mat(kHeight, kWidth, CV_32F, cv::Scalar(1.5f));
-      writer.Add(frame, Eigen::Isometry3d::Identity());
-    }
-    writer.Finish();
-    sequence_ = TumSequence::Open(root_ / "seq");
+    sequence_ = testing::WriteFlatSequence(root_ / "seq", kWidth, kHeight, kFrames, 10.0, 0.5);
     masks_ = root_ / "masks";
     fs::create_directories(masks_);
     for (int i = 0; i < kFrames; ++i) {
