@@ -1,0 +1,296 @@
+// Tracking a frame against the map (see slam/tracker.h): projection matching from the last
+// frame (constant velocity) and from the local map, descriptor matching against the
+// reference keyframe, relocalization against every map point, and the robust pose
+// optimisation that follows each.
+#include <cmath>
+#include <opencv2/features2d.hpp>
+
+#include "slam/tracker_internal.h"
+
+namespace segslam::slam {
+
+std::vector<PoseObservation> Tracker::Impl::Observations(const WorkingFrame& frame,
+                                                         std::vector<int>* feature_of_observation,
+                                                         bool skip_excluded) const {
+  return ObservationsOf(frame, feature_of_observation, [&](size_t i) {
+    return frame.points[i] != nullptr && !(skip_excluded && frame.excluded[i]) ? frame.points[i] : nullptr;
+  });
+}
+
+// Optimises current.T_cw from its matches; flags outliers; returns the inlier count.
+// `discard_outliers` drops outlier matches (remembering them for the judgement).
+int Tracker::Impl::OptimizeCurrentPose(bool skip_excluded, bool discard_outliers) {
+  std::vector<int> feature_of;
+  const std::vector<PoseObservation> observations = Observations(current, &feature_of, skip_excluded);
+  if (observations.size() < 3) return 0;
+  PoseOptimizerOptions pose_options;
+  pose_options.bf = bf;
+  const PoseOptimizationResult optimized = OptimizePose(current.T_cw, observations, camera, pose_options);
+  current.T_cw = optimized.T_cw;
+  int inliers = 0;
+  for (size_t k = 0; k < feature_of.size(); ++k) {
+    const size_t i = static_cast<size_t>(feature_of[k]);
+    current.outlier[i] = !optimized.inlier[k];
+    if (optimized.inlier[k]) {
+      ++inliers;
+    } else if (discard_outliers) {
+      current.rejected[i] = current.points[i];
+      current.points[i] = nullptr;
+      current.outlier[i] = false;
+    }
+  }
+  return inliers;
+}
+
+// The map point feature i was matched to, kept or rejected as an outlier.
+MapPoint* Tracker::Impl::MatchedPoint(size_t i) const {
+  return current.points[i] != nullptr ? current.points[i] : current.rejected[i];
+}
+
+// Best feature of the current frame for `descriptor` among `candidates` that have no
+// match yet; returns -1 if none passes the distance limit and the ratio test.
+int Tracker::Impl::BestCandidate(const OrbDescriptor& descriptor, const std::vector<int>& candidates, int max_distance,
+                                 float ratio) const {
+  int best = 256, second = 256, best_index = -1, best_level = -1, second_level = -1;
+  for (int index : candidates) {
+    if (current.points[static_cast<size_t>(index)] != nullptr) continue;
+    const int d = DescriptorDistance(descriptor.data(), current.features.descriptors.ptr<std::uint8_t>(index));
+    const int level = current.features.keypoints[static_cast<size_t>(index)].octave;
+    if (d < best) {
+      second = best;
+      second_level = best_level;
+      best = d;
+      best_index = index;
+      best_level = level;
+    } else if (d < second) {
+      second = d;
+      second_level = level;
+    }
+  }
+  if (best_index < 0 || best > max_distance) return -1;
+  if (ratio < 1.0f && best_level == second_level && best > ratio * second) return -1;
+  return best_index;
+}
+
+// Projects the matched points of the last frame into the current one (ORB-SLAM's
+// SearchByProjection for the motion model); returns the number of matches.
+int Tracker::Impl::SearchLastFrame(double radius_px) {
+  int matches = 0;
+  RotationHistogram histogram;
+  std::vector<int> candidates;
+  const auto& scales = extractor.scale_factors();
+  const int levels = extractor.options().levels;
+  for (size_t j = 0; j < last.points.size(); ++j) {
+    MapPoint* point = last.points[j];
+    if (point == nullptr || point->bad || last.outlier[j]) continue;
+    if (point->last_matched_frame == current.index) continue;
+    const Eigen::Vector3d p_c = current.T_cw * point->position_w;
+    if (p_c.z() <= 0) continue;
+    const Eigen::Vector2d uv = camera.Project(p_c);
+    if (!camera.InImage(uv)) continue;
+    const int level = last.features.keypoints[j].octave;
+    const double radius = radius_px * scales[static_cast<size_t>(level)];
+    current.grid.Query(current.features.keypoints, uv.x(), uv.y(), radius, std::max(0, level - 1),
+                       std::min(levels - 1, level + 1), &candidates);
+    const int best = BestCandidate(point->descriptor, candidates, options.max_descriptor_distance, 1.0f);
+    if (best < 0) continue;
+    current.points[static_cast<size_t>(best)] = point;
+    point->last_matched_frame = current.index;
+    histogram.Add(best, last.features.keypoints[j].angle, current.features.keypoints[static_cast<size_t>(best)].angle);
+    ++matches;
+  }
+  for (int rejected : histogram.Rejected()) {
+    current.points[static_cast<size_t>(rejected)]->last_matched_frame = -1;
+    current.points[static_cast<size_t>(rejected)] = nullptr;
+    --matches;
+  }
+  return matches;
+}
+
+bool Tracker::Impl::IsOccluded(const Eigen::Vector2d& uv, double z) const {
+  if (current.depth_m.empty()) return false;
+  const int x = static_cast<int>(std::lround(uv.x()));
+  const int y = static_cast<int>(std::lround(uv.y()));
+  const float measured = current.depth_m.at<float>(y, x);
+  // Something measurably in front of the point hides it (moving objects included);
+  // the margin absorbs depth noise and edges.
+  return std::isfinite(measured) && measured > 0 && measured < 0.85 * z - 0.1;
+}
+
+// Matches every map point that the current frame should see (frustum, scale range,
+// viewing angle, depth occlusion) by projection: ORB-SLAM's SearchLocalPoints, over
+// the whole map (a brute-force frustum test costs well under a millisecond per 10^5
+// points, and needs no covisibility graph). Returns the number of new matches.
+int Tracker::Impl::SearchLocalMap(double radius_factor) {
+  int matches = 0;
+  const Eigen::Isometry3d T_wc = current.T_cw.inverse();
+  const Eigen::Vector3d center = T_wc.translation();
+  const auto& scales = extractor.scale_factors();
+  std::vector<int> candidates;
+  for (const auto& owned : map->points()) {
+    MapPoint* point = owned.get();
+    if (point->bad || point->last_matched_frame == current.index) continue;
+    const Eigen::Vector3d p_c = current.T_cw * point->position_w;
+    if (p_c.z() <= 0.05) continue;
+    const Eigen::Vector2d uv = camera.Project(p_c);
+    if (!camera.InImage(uv, 1)) continue;
+    const Eigen::Vector3d ray = point->position_w - center;
+    const double distance = ray.norm();
+    if (point->max_distance_m > 0 &&
+        (distance < 0.8 * point->min_distance_m || distance > 1.2 * point->max_distance_m)) {
+      continue;
+    }
+    const double view_cos = ray.dot(point->viewing_direction_w) / distance;
+    if (view_cos < 0.5) continue;
+    if (IsOccluded(uv, p_c.z())) continue;
+    if (point->last_visible_frame != current.index) {
+      point->last_visible_frame = current.index;
+      ++point->visible_count;
+    }
+    const int level = point->PredictLevel(distance, extractor);
+    const double radius = radius_factor * (view_cos > 0.998 ? 2.5 : 4.0) * scales[static_cast<size_t>(level)];
+    current.grid.Query(current.features.keypoints, uv.x(), uv.y(), radius, std::max(0, level - 1), level, &candidates);
+    const int best =
+        BestCandidate(point->descriptor, candidates, options.max_descriptor_distance, options.projection_ratio);
+    if (best < 0) continue;
+    current.points[static_cast<size_t>(best)] = point;
+    current.outlier[static_cast<size_t>(best)] = false;
+    point->last_matched_frame = current.index;
+    ++matches;
+  }
+  return matches;
+}
+
+void Tracker::Impl::ClearMatches() {
+  std::fill(current.points.begin(), current.points.end(), nullptr);
+  std::fill(current.outlier.begin(), current.outlier.end(), false);
+  std::fill(current.rejected.begin(), current.rejected.end(), nullptr);
+}
+
+void Tracker::Impl::MarkCurrentMatched() {
+  for (MapPoint* point : current.points) {
+    if (point != nullptr) point->last_matched_frame = current.index;
+  }
+}
+
+bool Tracker::Impl::TrackWithMotionModel() {
+  ClearMatches();
+  const bool have_velocity = velocity.has_value();
+  current.T_cw = have_velocity ? Eigen::Isometry3d(*velocity * last.T_cw) : last.T_cw;
+  double radius = options.last_frame_radius_px * (have_velocity ? 1.0 : 2.0);
+  int matches = SearchLastFrame(radius);
+  if (matches < 20) {
+    ClearMatches();
+    matches = SearchLastFrame(2 * radius);
+  }
+  if (matches < 20) return false;
+  return OptimizeCurrentPose(/*skip_excluded=*/false, /*discard_outliers=*/true) >= 10;
+}
+
+bool Tracker::Impl::TrackReferenceKeyframe() {
+  if (reference_keyframe == nullptr) return false;
+  ClearMatches();
+  std::vector<int> reference_features;
+  for (size_t i = 0; i < reference_keyframe->points.size(); ++i) {
+    const MapPoint* point = reference_keyframe->points[i];
+    if (point != nullptr && !point->bad) reference_features.push_back(static_cast<int>(i));
+  }
+  if (reference_features.size() < 15 || current.features.size() == 0) return false;
+  cv::Mat reference_descriptors(static_cast<int>(reference_features.size()), kOrbDescriptorBytes, CV_8U);
+  for (size_t k = 0; k < reference_features.size(); ++k) {
+    reference_keyframe->features.descriptors.row(reference_features[k])
+        .copyTo(reference_descriptors.row(static_cast<int>(k)));
+  }
+  cv::BFMatcher matcher(cv::NORM_HAMMING);
+  std::vector<std::vector<cv::DMatch>> knn;
+  matcher.knnMatch(current.features.descriptors, reference_descriptors, knn, 2);
+  int matches = 0;
+  for (const auto& pair : knn) {
+    if (pair.empty() || pair[0].distance > options.strict_descriptor_distance) continue;
+    if (pair.size() > 1 && pair[0].distance > 0.7f * pair[1].distance) continue;
+    MapPoint* point =
+        reference_keyframe->points[static_cast<size_t>(reference_features[static_cast<size_t>(pair[0].trainIdx)])];
+    if (point->last_matched_frame == current.index) continue;
+    current.points[static_cast<size_t>(pair[0].queryIdx)] = point;
+    point->last_matched_frame = current.index;
+    ++matches;
+  }
+  if (matches < 15) return false;
+  current.T_cw = last.T_cw;
+  return OptimizeCurrentPose(false, true) >= 10;
+}
+
+// The local-map stage after a successful first stage; true if the frame is tracked.
+bool Tracker::Impl::TrackLocalMap(int min_inliers, double radius_factor) {
+  SearchLocalMap(radius_factor);
+  const int inliers = OptimizeCurrentPose(false, false);
+  result.num_coarse_inliers = inliers;
+  return inliers >= min_inliers;
+}
+
+// Puts the first frame at options.initial_T_wc and fixes the close-point depth; the
+// keyframe follows in UpdateMaps(). False while the frame has too few features with depth.
+bool Tracker::Impl::InitializeMap() {
+  if (result.num_features_with_depth < options.min_initial_map_features) return false;
+  current.T_cw = options.initial_T_wc.inverse();
+  initialized = true;
+  pending_first_keyframe = true;
+  if (options.close_depth_m > 0) {
+    close_depth_m = options.close_depth_m;
+  } else {
+    std::vector<float> depths;
+    for (float d : current.features.depth_m)
+      if (d > 0) depths.push_back(d);
+    std::nth_element(depths.begin(), depths.begin() + depths.size() / 2, depths.end());
+    close_depth_m = std::clamp(double(depths[depths.size() / 2]), 3.0, 25.0);
+  }
+  return true;
+}
+
+// Relocalization against every map point: nearest-neighbour descriptor search with a
+// ratio test, RANSAC PnP, pose optimisation, then a local-map search.
+bool Tracker::Impl::Relocalize() {
+  ClearMatches();
+  std::vector<MapPoint*> candidates;
+  for (const auto& owned : map->points()) {
+    if (!owned->bad) candidates.push_back(owned.get());
+  }
+  if (candidates.size() < 20 || current.features.size() < 20) return false;
+  cv::Mat map_descriptors(static_cast<int>(candidates.size()), kOrbDescriptorBytes, CV_8U);
+  for (size_t k = 0; k < candidates.size(); ++k) {
+    std::copy(candidates[k]->descriptor.begin(), candidates[k]->descriptor.end(),
+              map_descriptors.ptr<std::uint8_t>(static_cast<int>(k)));
+  }
+  cv::BFMatcher matcher(cv::NORM_HAMMING);
+  std::vector<std::vector<cv::DMatch>> knn;
+  matcher.knnMatch(current.features.descriptors, map_descriptors, knn, 2);
+  std::vector<cv::Point3f> object_points;
+  std::vector<cv::Point2f> image_points;
+  std::vector<std::pair<int, MapPoint*>> matched;
+  for (const auto& pair : knn) {
+    if (pair.empty() || pair[0].distance > 64) continue;
+    if (pair.size() > 1 && pair[0].distance > options.relocalization_ratio * pair[1].distance) continue;
+    MapPoint* point = candidates[static_cast<size_t>(pair[0].trainIdx)];
+    const Eigen::Vector3d& p = point->position_w;
+    object_points.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()));
+    image_points.push_back(current.features.keypoints[static_cast<size_t>(pair[0].queryIdx)].pt);
+    matched.emplace_back(pair[0].queryIdx, point);
+  }
+  if (matched.size() < 15) return false;
+  cv::Mat rvec, tvec;
+  std::vector<int> inliers;
+  const bool solved = cv::solvePnPRansac(object_points, image_points, cv::Mat(camera.KCv()), cv::noArray(), rvec, tvec,
+                                         false, 300, 4.0f, 0.99, inliers, cv::SOLVEPNP_EPNP);
+  if (!solved || inliers.size() < 15) return false;
+  current.T_cw = PoseFromRvecTvec(rvec, tvec);
+  for (int k : inliers) {
+    const auto& [feature, point] = matched[static_cast<size_t>(k)];
+    if (point->last_matched_frame == current.index) continue;
+    current.points[static_cast<size_t>(feature)] = point;
+    point->last_matched_frame = current.index;
+  }
+  if (OptimizeCurrentPose(false, true) < 10) return false;
+  return TrackLocalMap(options.min_relocalization_inliers, 5.0);
+}
+
+}  // namespace segslam::slam

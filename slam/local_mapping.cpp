@@ -1,0 +1,228 @@
+// The mapping side of the tracker: when a frame becomes a keyframe, the points it adds,
+// the culling of spurious new points, and local bundle adjustment over the newest
+// keyframes (run in line, so results are deterministic).
+#include <cmath>
+#include <set>
+
+#include "slam/tracker_internal.h"
+
+namespace segslam::slam {
+
+bool Tracker::Impl::NeedNewKeyframe() const {
+  if (reference_keyframe == nullptr) return true;
+  int inliers = 0, tracked_close = 0, untracked_close = 0;
+  for (size_t i = 0; i < current.points.size(); ++i) {
+    const bool tracked = current.points[i] != nullptr && !current.outlier[i];
+    if (tracked) ++inliers;
+    const float depth = current.features.depth_m[i];
+    if (depth > 0 && depth < close_depth_m && !current.excluded[i]) {
+      if (tracked)
+        ++tracked_close;
+      else
+        ++untracked_close;
+    }
+  }
+  // ORB-SLAM counts an RGB-D observation twice (it is a stereo pair) and asks for 2
+  // observations while the map has at most two keyframes, 3 later: here that is one
+  // keyframe, then two.
+  const int min_observations = map->keyframes().size() <= 2 ? 1 : 2;
+  int reference_points = 0;
+  for (const MapPoint* point : reference_keyframe->points) {
+    if (point != nullptr && !point->bad && point->NumObservations() >= min_observations) ++reference_points;
+  }
+  const bool need_close = tracked_close < 100 && untracked_close > 70;
+  const bool few_tracked = inliers < options.keyframe_tracked_ratio * reference_points;
+  const bool long_ago = current.index - last_keyframe_frame >= options.max_frames_between_keyframes;
+  return ((few_tracked || need_close) && inliers > 15) || (long_ago && inliers > 15 && few_tracked);
+}
+
+void Tracker::Impl::CreateKeyframe() {
+  auto owned = std::make_unique<Keyframe>();
+  owned->id = map->NextKeyframeId();
+  owned->frame_index = current.index;
+  owned->stamp_s = current.stamp_s;
+  owned->T_cw = current.T_cw;
+  owned->features = current.features;
+  owned->points.assign(current.features.size(), nullptr);
+  Keyframe* keyframe = map->AddKeyframe(std::move(owned));
+
+  for (size_t i = 0; i < current.points.size(); ++i) {
+    MapPoint* point = current.points[i];
+    if (point == nullptr || point->bad || current.outlier[i] || current.excluded[i]) continue;
+    Map::AddObservation(point, keyframe, static_cast<int>(i));
+    if (!point->fixed) Map::UpdatePointStatistics(point, extractor);
+  }
+  const Eigen::Isometry3d T_wc = current.T_cw.inverse();
+  for (size_t i = 0; i < current.features.size(); ++i) {
+    if (keyframe->points[i] != nullptr || current.excluded[i]) continue;
+    if (current.points[i] != nullptr && !current.outlier[i]) continue;
+    const float depth = current.features.depth_m[i];
+    if (!(depth > 0) || depth > options.max_point_depth_m) continue;
+    auto point = std::make_unique<MapPoint>();
+    point->id = map->NextPointId();
+    point->position_w = T_wc * current.features.points_cam[i];
+    point->instance_id = current.instance[i];
+    point->first_keyframe_id = keyframe->id;
+    point->first_stamp_s = current.stamp_s;
+    point->last_matched_frame = current.index;
+    point->last_visible_frame = current.index;
+    const cv::KeyPoint& kp = current.features.keypoints[i];
+    const cv::Vec3b bgr =
+        current.color_bgr.at<cv::Vec3b>(static_cast<int>(std::lround(kp.pt.y)), static_cast<int>(std::lround(kp.pt.x)));
+    point->color_rgb = {bgr[2], bgr[1], bgr[0]};
+    MapPoint* added = map->AddPoint(std::move(point));
+    Map::AddObservation(added, keyframe, static_cast<int>(i));
+    Map::UpdatePointStatistics(added, extractor);
+    current.points[i] = added;
+    current.outlier[i] = false;
+    recent_points.push_back(added);
+  }
+  reference_keyframe = keyframe;
+  last_keyframe_frame = current.index;
+  result.keyframe = true;
+
+  if (!localization_mode) {
+    CullRecentPoints(keyframe);
+    if (options.local_bundle_adjustment) {
+      const Clock::time_point start = Clock::now();
+      LocalBundleAdjustment();
+      result.timings.bundle_adjustment_ms = MsSince(start);
+    }
+  }
+  if (++keyframes_since_purge >= 5) PurgeBadPoints();
+}
+
+// ORB-SLAM's culling of recently created points: those the tracker rarely finds where
+// they should be visible, or that no later keyframe confirmed, are spurious.
+void Tracker::Impl::CullRecentPoints(const Keyframe* keyframe) {
+  std::vector<MapPoint*> kept;
+  for (MapPoint* point : recent_points) {
+    if (point->bad) continue;
+    const std::uint64_t age = keyframe->id - point->first_keyframe_id;
+    if (point->FoundRatio() < 0.25) {
+      Map::MarkBad(point);
+    } else if (age >= 2 && point->NumObservations() < 2) {
+      Map::MarkBad(point);
+    } else if (age < 3) {
+      kept.push_back(point);
+    }
+  }
+  recent_points = std::move(kept);
+}
+
+// The newest good keyframes, newest first: local bundle adjustment's free poses.
+std::vector<Keyframe*> Tracker::Impl::LocalWindow() const {
+  std::vector<Keyframe*> window;
+  const auto& keyframes = map->keyframes();
+  for (auto it = keyframes.rbegin();
+       it != keyframes.rend() && static_cast<int>(window.size()) < options.local_ba_keyframes; ++it) {
+    if (!(*it)->bad) window.push_back(it->get());
+  }
+  return window;
+}
+
+Tracker::Impl::LocalBaProblem Tracker::Impl::MakeLocalBaProblem(const std::vector<Keyframe*>& window) const {
+  LocalBaProblem problem;
+  for (Keyframe* keyframe : window) problem.keyframe_index[keyframe] = -1;
+  std::set<std::uint64_t> seen;
+  for (Keyframe* keyframe : window) {
+    for (MapPoint* point : keyframe->points) {
+      if (point == nullptr || point->bad || point->fixed || !seen.insert(point->id).second) continue;
+      problem.points.push_back(point);
+    }
+  }
+  std::sort(problem.points.begin(), problem.points.end(),
+            [](const MapPoint* a, const MapPoint* b) { return a->id < b->id; });
+  for (MapPoint* point : problem.points) {
+    for (const auto& observation : point->observations) problem.keyframe_index.emplace(observation.first, -1);
+  }
+  const std::uint64_t first_keyframe_id = map->keyframes().front()->id;
+  bool any_fixed = false;
+  for (auto& [keyframe, index] : problem.keyframe_index) {
+    const bool in_window = std::find(window.begin(), window.end(), keyframe) != window.end();
+    const bool fixed = !in_window || keyframe->id == first_keyframe_id;
+    any_fixed = any_fixed || fixed;
+    index = static_cast<int>(problem.keyframes.size());
+    problem.keyframes.push_back({keyframe->T_cw, fixed});
+  }
+  if (!any_fixed) problem.keyframes.front().fixed = true;  // the oldest fixes the gauge
+
+  const auto& inverse_sigma2 = extractor.inverse_level_sigma2();
+  for (size_t p = 0; p < problem.points.size(); ++p) {
+    MapPoint* point = problem.points[p];
+    problem.positions.push_back(point->position_w);
+    for (const auto& [keyframe, feature] : point->observations) {
+      const cv::KeyPoint& kp = keyframe->features.keypoints[static_cast<size_t>(feature)];
+      BaObservation observation;
+      observation.keyframe = problem.keyframe_index.at(keyframe);
+      observation.point = static_cast<int>(p);
+      observation.pixel = Eigen::Vector2d(kp.pt.x, kp.pt.y);
+      const float depth = keyframe->features.depth_m[static_cast<size_t>(feature)];
+      if (depth > 0) observation.right_u = kp.pt.x - bf / depth;
+      observation.information = inverse_sigma2[static_cast<size_t>(kp.octave)];
+      problem.observations.push_back(observation);
+      problem.observation_owner.emplace_back(point, keyframe);
+    }
+  }
+  return problem;
+}
+
+// Moves the free keyframes and the points to the adjusted values and unlinks the
+// observations the adjustment found to be outliers (a point left unobserved is bad).
+void Tracker::Impl::ApplyLocalBa(const LocalBaProblem& problem, const BundleAdjustmentResult& adjusted) {
+  for (const auto& [keyframe, index] : problem.keyframe_index) {
+    if (!problem.keyframes[static_cast<size_t>(index)].fixed)
+      keyframe->T_cw = adjusted.T_cw[static_cast<size_t>(index)];
+  }
+  for (size_t p = 0; p < problem.points.size(); ++p) problem.points[p]->position_w = adjusted.points_w[p];
+  for (size_t k = 0; k < problem.observations.size(); ++k) {
+    if (adjusted.observation_inlier[k]) continue;
+    auto [point, keyframe] = problem.observation_owner[k];
+    const auto found = point->observations.find(keyframe);
+    if (found == point->observations.end()) continue;
+    if (keyframe->points[static_cast<size_t>(found->second)] == point) {
+      keyframe->points[static_cast<size_t>(found->second)] = nullptr;
+    }
+    point->observations.erase(found);
+    if (point->observations.empty()) Map::MarkBad(point);
+  }
+  for (MapPoint* point : problem.points) {
+    if (!point->bad) Map::UpdatePointStatistics(point, extractor);
+  }
+}
+
+void Tracker::Impl::LocalBundleAdjustment() {
+  const std::vector<Keyframe*> window = LocalWindow();
+  if (window.size() < 2) return;
+  const LocalBaProblem problem = MakeLocalBaProblem(window);
+  if (problem.observations.empty()) return;
+  BundleAdjustmentOptions ba_options;
+  ba_options.bf = bf;
+  ApplyLocalBa(problem,
+               RunBundleAdjustment(camera, problem.keyframes, problem.positions, problem.observations, ba_options));
+  // The current frame's pose moves with its keyframe.
+  current.T_cw = reference_keyframe->T_cw;
+}
+
+void Tracker::Impl::PurgeBadPoints() {
+  for (WorkingFrame* frame : {&current, &last}) {
+    for (MapPoint*& point : frame->points) {
+      if (point != nullptr && point->bad) point = nullptr;
+    }
+    for (MapPoint*& point : frame->rejected) {
+      if (point != nullptr && point->bad) point = nullptr;
+    }
+  }
+  recent_points.erase(
+      std::remove_if(recent_points.begin(), recent_points.end(), [](const MapPoint* p) { return p->bad; }),
+      recent_points.end());
+  if (reference_keyframe != nullptr) {
+    for (MapPoint*& point : reference_keyframe->points) {
+      if (point != nullptr && point->bad) point = nullptr;
+    }
+  }
+  map->PurgeBadPoints();
+  keyframes_since_purge = 0;
+}
+
+}  // namespace segslam::slam

@@ -1,0 +1,338 @@
+// The tracker's working state, shared by the files that implement slam/tracker.h:
+//   tracker.cpp             the per-frame steps of the public interface
+//   frame_tracking.cpp      matching by projection and descriptors, the tracking stages
+//                           (motion model, reference keyframe, local map), relocalization
+//   instance_judgement.cpp  moving or static, per instance (the paper's step 3)
+//   local_mapping.cpp       keyframes, new points, culling, local bundle adjustment
+// Private to slam/: nothing outside it includes this header.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <optional>
+#include <unordered_set>
+#include <vector>
+
+#include <Eigen/Geometry>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/core/eigen.hpp>
+
+#include "slam/bundle_adjustment.h"
+#include "slam/map.h"
+#include "slam/pose_optimizer.h"
+#include "slam/tracker.h"
+
+namespace segslam::slam {
+
+using Clock = std::chrono::steady_clock;
+
+inline double MsSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+// Keypoint indices bucketed by position, for searches in a window around a projection.
+class FeatureGrid {
+ public:
+  static constexpr int kCellPx = 16;
+
+  void Build(const std::vector<cv::KeyPoint>& keypoints, int width, int height) {
+    cols_ = (width + kCellPx - 1) / kCellPx;
+    rows_ = (height + kCellPx - 1) / kCellPx;
+    cells_.assign(static_cast<size_t>(cols_ * rows_), {});
+    for (size_t i = 0; i < keypoints.size(); ++i) {
+      const int c = std::clamp(static_cast<int>(keypoints[i].pt.x) / kCellPx, 0, cols_ - 1);
+      const int r = std::clamp(static_cast<int>(keypoints[i].pt.y) / kCellPx, 0, rows_ - 1);
+      cells_[static_cast<size_t>(r * cols_ + c)].push_back(static_cast<int>(i));
+    }
+  }
+
+  // Indices of keypoints within `radius` of (x, y) whose level lies in [min_level, max_level].
+  void Query(const std::vector<cv::KeyPoint>& keypoints, double x, double y, double radius,
+             int min_level, int max_level, std::vector<int>* out) const {
+    out->clear();
+    const int c0 = std::max(0, static_cast<int>(std::floor((x - radius) / kCellPx)));
+    const int c1 = std::min(cols_ - 1, static_cast<int>(std::floor((x + radius) / kCellPx)));
+    const int r0 = std::max(0, static_cast<int>(std::floor((y - radius) / kCellPx)));
+    const int r1 = std::min(rows_ - 1, static_cast<int>(std::floor((y + radius) / kCellPx)));
+    const double radius2 = radius * radius;
+    for (int r = r0; r <= r1; ++r) {
+      for (int c = c0; c <= c1; ++c) {
+        for (int index : cells_[static_cast<size_t>(r * cols_ + c)]) {
+          const cv::KeyPoint& kp = keypoints[static_cast<size_t>(index)];
+          if (kp.octave < min_level || kp.octave > max_level) continue;
+          const double dx = kp.pt.x - x;
+          const double dy = kp.pt.y - y;
+          if (dx * dx + dy * dy <= radius2) out->push_back(index);
+        }
+      }
+    }
+  }
+
+ private:
+  int cols_ = 0;
+  int rows_ = 0;
+  std::vector<std::vector<int>> cells_;
+};
+
+// ORB-SLAM's rotation consistency check: the orientation changes of correct matches
+// agree, so only the matches in the three most populated histogram bins are kept.
+class RotationHistogram {
+ public:
+  static constexpr int kBins = 30;
+  void Add(int feature, float angle_from_deg, float angle_to_deg) {
+    float change = angle_to_deg - angle_from_deg;
+    if (change < 0) change += 360.0f;
+    const int bin = std::min(kBins - 1, static_cast<int>(change * kBins / 360.0f));
+    bins_[static_cast<size_t>(bin)].push_back(feature);
+  }
+  // Features outside the three strongest bins (a bin under 10% of the strongest is
+  // dropped too, as ORB-SLAM does).
+  std::vector<int> Rejected() const {
+    std::array<size_t, kBins> order{};
+    for (int i = 0; i < kBins; ++i) order[static_cast<size_t>(i)] = static_cast<size_t>(i);
+    std::stable_sort(order.begin(), order.end(),
+                     [&](size_t a, size_t b) { return bins_[a].size() > bins_[b].size(); });
+    const size_t strongest = bins_[order[0]].size();
+    std::vector<int> rejected;
+    for (int rank = 0; rank < kBins; ++rank) {
+      const auto& bin = bins_[order[static_cast<size_t>(rank)]];
+      const bool keep = rank < 3 && bin.size() * 10 >= strongest;
+      if (!keep) rejected.insert(rejected.end(), bin.begin(), bin.end());
+    }
+    return rejected;
+  }
+
+ private:
+  std::array<std::vector<int>, kBins> bins_;
+};
+
+// What the judgement of later frames needs to know of a past frame: its instance
+// features, their descriptors and world positions.
+struct InstanceSnapshot {
+  int frame_index = 0;
+  double stamp_s = 0;
+  std::vector<std::uint16_t> instance;          // per stored feature
+  std::vector<Eigen::Vector3d> point_w;         // NaN where no depth
+  cv::Mat descriptors;                          // rows = stored features
+};
+
+// The 3-D displacements measured on one instance. A moving rigid object moves all its
+// points the same way; mismatches on a still one scatter. So the object moves only if
+// the component-wise median displacement, not just most single points, exceeds the
+// threshold.
+struct MotionEvidence {
+  std::vector<Eigen::Vector3d> displacements;
+  std::vector<double> thresholds;
+
+  void Add(const Eigen::Vector3d& displacement, double threshold) {
+    displacements.push_back(displacement);
+    thresholds.push_back(threshold);
+  }
+
+  // True when there are no 3-D measurements (reprojection evidence only) or when the
+  // median displacement exceeds the median threshold.
+  bool ConsensusMoves() const {
+    if (displacements.empty()) return true;
+    auto median = [](std::vector<double> values) {
+      std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+      return values[values.size() / 2];
+    };
+    Eigen::Vector3d median_displacement;
+    for (int axis = 0; axis < 3; ++axis) {
+      std::vector<double> component;
+      for (const Eigen::Vector3d& d : displacements) component.push_back(d[axis]);
+      median_displacement[axis] = median(component);
+    }
+    return median_displacement.norm() > median(thresholds);
+  }
+};
+
+// What the judgement remembers of one instance between frames.
+struct InstanceMotionMemory {
+  int moving_frames = 0;  // measured moving, frames in a row (none moving_memory_s apart)
+  double last_moving_stamp_s = -1e9;
+  int static_frames = 0;  // judged static over a full baseline, frames in a row
+};
+
+struct WorkingFrame {
+  int index = -1;
+  double stamp_s = 0;
+  cv::Mat color_bgr;
+  cv::Mat depth_m;
+  FrameFeatures features;
+  FeatureGrid grid;
+  std::vector<MapPoint*> points;        // match per feature (nullptr = none)
+  std::vector<bool> outlier;            // match rejected by the last pose optimisation
+  std::vector<MapPoint*> rejected;      // outlier matches removed before local-map search
+  std::vector<std::uint16_t> instance;  // instance id per feature, 0 = background
+  std::vector<bool> excluded;           // moving / unjudged moveable: not for fine pose or map
+  Eigen::Isometry3d T_cw = Eigen::Isometry3d::Identity();
+};
+
+inline Eigen::Isometry3d PoseFromRvecTvec(const cv::Mat& rvec, const cv::Mat& tvec) {
+  cv::Mat rotation;
+  cv::Rodrigues(rvec, rotation);
+  Eigen::Matrix3d R;
+  cv::cv2eigen(rotation, R);
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = R;
+  T.translation() = Eigen::Vector3d(tvec.at<double>(0), tvec.at<double>(1), tvec.at<double>(2));
+  return T;
+}
+
+struct Tracker::Impl {
+  Impl(const PinholeCamera& cam, const TrackerOptions& opts, Map* m)
+      : camera(cam), options(opts), map(m), extractor(opts.orb) {
+    bf = 1.0 / options.depth_sigma_at_1m;
+  }
+
+  const PinholeCamera camera;
+  const TrackerOptions options;
+  Map* map;
+  OrbExtractor extractor;
+  double bf = 0;
+  double close_depth_m = 0;
+
+  WorkingFrame current;
+  WorkingFrame last;
+  bool have_last = false;
+  std::optional<Eigen::Isometry3d> velocity;  // T_cw(t-1) * T_cw(t-2)^-1
+  Keyframe* reference_keyframe = nullptr;
+  int last_keyframe_frame = -1000;
+  int last_relocalization_frame = -1000;
+  bool initialized = false;
+  bool pending_first_keyframe = false;
+  bool last_status_lost = false;
+  double lost_since_s = -1;  // stamp of the first frame of the current run of lost frames
+  bool reset_map = false;    // drop the map once this frame is done
+  bool localization_mode = false;
+  std::deque<InstanceSnapshot> history;
+  std::map<std::uint16_t, InstanceMotionMemory> motion_memory;  // per instance id
+  std::vector<MapPoint*> recent_points;
+  int keyframes_since_purge = 0;
+
+  // Per-frame state.
+  bool coarse_ok = false;
+  bool fine_ok = false;
+  bool judged = false;
+  FrameResult result;
+  Clock::time_point frame_start;
+  // Features DropMoveableFeatures() removed from `current` (record_features only).
+  std::vector<FeatureRecord> dropped_moveable_records;
+
+  // One record per feature of the frame (TrackerOptions::record_features).
+  std::vector<FeatureRecord> FeatureRecords() const;
+  bool last_lost() const { return last_status_lost; }
+
+  // ------------------------------------------- matching (frame_tracking.cpp)
+
+  // The observations of `frame`'s matched features (without the excluded ones).
+  std::vector<PoseObservation> Observations(const WorkingFrame& frame,
+                                            std::vector<int>* feature_of_observation,
+                                            bool skip_excluded) const;
+
+  // The observations of the features for which `match(i)` gives a map point.
+  template <typename MatchOf>
+  std::vector<PoseObservation> ObservationsOf(const WorkingFrame& frame, std::vector<int>* feature_of_observation,
+                                              const MatchOf& match) const {
+    std::vector<PoseObservation> observations;
+    feature_of_observation->clear();
+    const auto& inverse_sigma2 = extractor.inverse_level_sigma2();
+    for (size_t i = 0; i < frame.points.size(); ++i) {
+      const MapPoint* point = match(i);
+      if (point == nullptr || point->bad) continue;
+      const cv::KeyPoint& kp = frame.features.keypoints[i];
+      PoseObservation observation;
+      observation.point_w = point->position_w;
+      observation.pixel = Eigen::Vector2d(kp.pt.x, kp.pt.y);
+      const float depth = frame.features.depth_m[i];
+      if (depth > 0) observation.right_u = kp.pt.x - bf / depth;
+      observation.information = inverse_sigma2[static_cast<size_t>(kp.octave)];
+      observations.push_back(observation);
+      feature_of_observation->push_back(static_cast<int>(i));
+    }
+    return observations;
+  }
+
+  int OptimizeCurrentPose(bool skip_excluded, bool discard_outliers);
+  MapPoint* MatchedPoint(size_t i) const;
+  int BestCandidate(const OrbDescriptor& descriptor, const std::vector<int>& candidates,
+                    int max_distance, float ratio) const;
+  int SearchLastFrame(double radius_px);
+  bool IsOccluded(const Eigen::Vector2d& uv, double z) const;
+  int SearchLocalMap(double radius_factor);
+  void ClearMatches();
+  void MarkCurrentMatched();
+
+  // ------------------------------------------- tracking stages (frame_tracking.cpp)
+
+  bool TrackWithMotionModel();
+  bool TrackReferenceKeyframe();
+  bool TrackLocalMap(int min_inliers, double radius_factor);
+  bool InitializeMap();
+  bool Relocalize();
+
+  // ------------------------------------------- judgement helpers (instance_judgement.cpp)
+
+  std::optional<Eigen::Isometry3d> BackgroundPose(const std::unordered_set<std::uint16_t>& moveable_ids) const;
+  bool OnDepthEdge(size_t i) const;
+  double MovingDistanceThreshold(double depth) const;
+  int MotionAgainstPoint(size_t i, const MapPoint* point, const Eigen::Isometry3d& T_wc,
+                         MotionEvidence* evidence) const;
+  InstanceSnapshot Snapshot() const;
+
+  struct HistoryMeasurement {
+    // A remembered frame held at least min_points_to_judge of the instance's features
+    // with depth: the instance was there to be followed.
+    bool found_instance = false;
+    // That frame was a full baseline back. A "static" verdict needs it: over one frame a
+    // walker moves less than the depth noise.
+    bool full_baseline = false;
+  };
+  HistoryMeasurement MotionAgainstHistory(std::uint16_t id, const std::vector<int>& features,
+                                          const Eigen::Isometry3d& T_wc, InstanceJudgement* judgement,
+                                          MotionEvidence* evidence) const;
+
+  // ------------------------------------------- judgement (instance_judgement.cpp)
+  // JudgeInstances() in steps: which features lie on which instance; what this frame
+  // measures of each instance's motion; the verdict on that measurement; what the
+  // instance's recent frames add to it; and what a verdict keeps out of the pose and map.
+
+  std::map<std::uint16_t, std::vector<int>> LabelFeatures(const cv::Mat& ids);
+  bool MeasureInstanceMotion(std::uint16_t id, const std::vector<int>& features,
+                             const Eigen::Isometry3d& T_wc, bool trust_young_points,
+                             InstanceJudgement* judgement, MotionEvidence* evidence) const;
+  void DecideMotion(bool full_baseline, const MotionEvidence& evidence, InstanceJudgement* judgement) const;
+  void ApplyMotionMemory(bool full_baseline, InstanceJudgement* judgement, InstanceMotionMemory* memory) const;
+  void KeepOutOfPoseAndMap(const InstanceJudgement& judgement, const std::vector<int>& features);
+
+  // ------------------------------------------- mapping (local_mapping.cpp)
+
+  bool NeedNewKeyframe() const;
+  void CreateKeyframe();
+  void CullRecentPoints(const Keyframe* keyframe);
+  std::vector<Keyframe*> LocalWindow() const;
+
+  // Local bundle adjustment's problem over a window: its keyframes and the good points
+  // they see are free; the other keyframes that see those points hold the window in
+  // place, and so does the map's first keyframe.
+  struct LocalBaProblem {
+    std::map<Keyframe*, int, KeyframeIdLess> keyframe_index;  // into `keyframes`
+    std::vector<BaKeyframe> keyframes;
+    std::vector<MapPoint*> points;  // ascending id
+    std::vector<Eigen::Vector3d> positions;  // of `points`
+    std::vector<BaObservation> observations;
+    std::vector<std::pair<MapPoint*, Keyframe*>> observation_owner;  // of `observations`
+  };
+  LocalBaProblem MakeLocalBaProblem(const std::vector<Keyframe*>& window) const;
+  void ApplyLocalBa(const LocalBaProblem& problem, const BundleAdjustmentResult& adjusted);
+  void LocalBundleAdjustment();
+  void PurgeBadPoints();
+};
+
+}  // namespace segslam::slam
