@@ -5,6 +5,7 @@
 #include <unordered_map>
 
 #include <fmt/format.h>
+#include <opencv2/imgproc.hpp>
 
 #include "core/coco.h"
 #include "core/coco_rle.h"
@@ -203,6 +204,22 @@ FrameSegmentation CocoDetections::Frame(size_t i) const {
     segmentation.instances.push_back(std::move(instance));
   }
   return segmentation;
+}
+
+nlohmann::json CocoResultsOfFrame(const FrameSegmentation& masks, int image_id) {
+  nlohmann::json results = nlohmann::json::array();
+  for (const InstanceMask& instance : masks.instances) {
+    const cv::Rect box = cv::boundingRect(instance.mask);
+    if (box.area() == 0) continue;
+    results.push_back({{"image_id", image_id},
+                       {"category_id", instance.category_id},
+                       {"segmentation",
+                        {{"size", {instance.mask.rows, instance.mask.cols}},
+                         {"counts", EncodeCocoRleString(CocoRleCounts(instance.mask))}}},
+                       {"bbox", {box.x, box.y, box.width, box.height}},
+                       {"score", instance.score}});
+  }
+  return results;
 }
 
 }  // namespace segslam::seg

@@ -1,6 +1,7 @@
 // An instance segmenter's detections in COCO's format, mapped onto the frames of a
 // sequence, so that any network's output can feed the core (`segslam masks import`
-// writes them in the external-mask layout of seg/external_masks.h).
+// writes them in the external-mask layout of seg/external_masks.h), and masks written
+// back in that format (`segslam masks export`), for COCO's own evaluation tools.
 //
 // Accepted files:
 //   - a results file, as detectron2, MMDetection or ultralytics (save_json) write it for
@@ -87,5 +88,11 @@ class CocoDetections {
   cv::Size image_size_;
   CocoImportCounts counts_;
 };
+
+// A frame's instances as entries of a COCO results list, the inverse of CocoDetections:
+// {"image_id", "category_id", "segmentation" (compressed RLE), "bbox" [x, y, w, h],
+// "score"}, in the order of `masks`; instances without a pixel are left out. The masks
+// should lie on the stored images (TumSequence::InstanceMaskAsStored), as a network's do.
+nlohmann::json CocoResultsOfFrame(const FrameSegmentation& masks, int image_id);
 
 }  // namespace segslam::seg

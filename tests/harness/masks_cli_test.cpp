@@ -1,7 +1,8 @@
-// `segslam masks images` and `segslam masks import` on a generated sequence (fixture
-// sim_datasets): the ground-truth masks, sent through the way a network's output comes
-// (an image list, a COCO results file with compressed RLE and integer image ids), come
-// back as the same masks, which seg-eval then scores as perfect; refused input and an
+// `segslam masks images | import | export` on a generated sequence (fixture sim_datasets):
+// the ground-truth masks, sent through the way a network's output comes (an image list, a
+// COCO results file with compressed RLE and integer image ids), come back as the same
+// masks, which seg-eval then scores as perfect; the simulated segmenter's output exported
+// and imported keeps every pixel; export and import are inverse; refused input and an
 // existing folder leave nothing behind.
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -118,6 +119,65 @@ TEST_F(MasksCliTest, GroundTruthThroughAResultsFileComesBackAsItWas) {
                                    " --min-score 0.7 --force -q");
   ASSERT_EQ(forced.exit_code, 0) << forced.stderr_text;
   EXPECT_NE(forced.stdout_text.find("scoring below 0.7"), std::string::npos) << forced.stdout_text;
+}
+
+// The simulated segmenter's output as COCO results, imported, scores the same pixels as
+// the segmenter read directly: the same per-class pixel counts and mIoU. Only detections
+// that higher-scoring ones cover entirely are gone (the folder holds one id per pixel), so
+// mAP may differ. Exporting the imported folder and importing it again changes nothing.
+TEST_F(MasksCliTest, ExportAndImportAreInverse) {
+  ASSERT_TRUE(fs::is_directory(sequence_)) << sequence_;
+  const std::string images = (dir_ / "images.json").string();
+  ASSERT_EQ(Run("masks images " + sequence_.string() + " --out " + images).exit_code, 0);
+  const std::string simulated = (dir_ / "simulated.json").string();
+  const CommandOutput exported =
+      Run("masks export " + sequence_.string() + " --segmenter fcis-like --seed 3 --out " + simulated + " -q");
+  ASSERT_EQ(exported.exit_code, 0) << exported.stderr_text;
+  const fs::path folder = dir_ / "imported";
+  const CommandOutput imported = Run("masks import " + sequence_.string() + " " + simulated + " --images " + images +
+                                     " --min-score 0 --out " + folder.string() + " -q");
+  ASSERT_EQ(imported.exit_code, 0) << imported.stderr_text;
+
+  ASSERT_EQ(Run("seg-eval " + sequence_.string() + " --masks " + folder.string() + " --out " +
+                (dir_ / "via_coco").string())
+                .exit_code,
+            0);
+  ASSERT_EQ(Run("seg-eval " + sequence_.string() + " --segmenter fcis-like --seed 3 --out " +
+                (dir_ / "direct").string())
+                .exit_code,
+            0);
+  const json via_coco = json::parse(ReadText(dir_ / "via_coco" / "seg_eval.json")).at("sequences")[0].at("raw");
+  const json direct = json::parse(ReadText(dir_ / "direct" / "seg_eval.json")).at("sequences")[0].at("raw");
+  EXPECT_EQ(via_coco.at("mIoU"), direct.at("mIoU"));
+  ASSERT_EQ(via_coco.at("categories").size(), direct.at("categories").size());
+  for (size_t c = 0; c < direct.at("categories").size(); ++c) {
+    for (const char* count : {"tp_pixels", "fp_pixels", "fn_pixels"}) {
+      EXPECT_EQ(via_coco.at("categories")[c].at(count), direct.at("categories")[c].at(count))
+          << direct.at("categories")[c].at("category") << " " << count;
+    }
+  }
+  EXPECT_LE(via_coco.at("detections").get<int>(), direct.at("detections").get<int>());
+  EXPECT_GT(via_coco.at("detections").get<int>(), 0);
+
+  const std::string again = (dir_ / "again.json").string();
+  ASSERT_EQ(Run("masks export " + sequence_.string() + " --masks " + folder.string() + " --out " + again + " -q")
+                .exit_code,
+            0);
+  const fs::path folder_again = dir_ / "imported_again";
+  ASSERT_EQ(Run("masks import " + sequence_.string() + " " + again + " --images " + images +
+                " --min-score 0 --out " + folder_again.string() + " -q")
+                .exit_code,
+            0);
+  int files = 0;
+  for (const auto& entry : fs::directory_iterator(folder)) {
+    EXPECT_EQ(ReadText(entry.path()), ReadText(folder_again / entry.path().filename())) << entry.path().filename();
+    ++files;
+  }
+  EXPECT_EQ(files, 80);
+
+  const CommandOutput neither = Run("masks export " + sequence_.string() + " --out " + again);
+  EXPECT_EQ(neither.exit_code, 1);
+  EXPECT_NE(neither.stderr_text.find("either --masks DIR or --segmenter PRESET"), std::string::npos);
 }
 
 TEST_F(MasksCliTest, RefusedInputLeavesNoFolder) {
