@@ -23,6 +23,7 @@ struct PreviewArgs {
   std::string out_file;
   double max_depth_m = 0;  // 0 = the 98th percentile of the first frame
   std::string camera_file;  // for the depth scale of a sequence without camera.yaml
+  std::string masks_dir;    // external masks (<stem>.png) instead of the sequence's masks/
 };
 
 int RunPreview(const PreviewArgs& args) {
@@ -44,15 +45,21 @@ int RunPreview(const PreviewArgs& args) {
       std::sort(valid.begin(), valid.end());
       max_depth_m = valid.empty() ? 1.0 : valid[valid.size() * 98 / 100];
     }
-    const fs::path mask_file = fs::path(args.sequence_dir) / "masks" /
-                               fs::path(sequence.entries()[index].rgb_file).filename();
+    const fs::path rgb_file = sequence.entries()[index].rgb_file;
+    const fs::path mask_file = args.masks_dir.empty()
+                                   ? fs::path(args.sequence_dir) / "masks" / rgb_file.filename()
+                                   : fs::path(args.masks_dir) / (rgb_file.stem().string() + ".png");
+    if (!args.masks_dir.empty() && !fs::exists(mask_file)) {
+      throw FileError(mask_file, fmt::format("missing: the mask of frame {} ({})", index, rgb_file.string()));
+    }
     cv::Mat overlay = fs::exists(mask_file)
                           ? OverlayPicture(frame.color_bgr, sequence.LoadInstanceMask(mask_file))
                           : frame.color_bgr.clone();
     rows.push_back(CaptionedRow(
         {frame.color_bgr, DepthPicture(frame.depth_m, max_depth_m), overlay},
         {fmt::format("frame {}  t={:.3f} s", index, frame.stamp_s),
-         fmt::format("depth 0..{:.1f} m", max_depth_m), "instances"}));
+         fmt::format("depth 0..{:.1f} m", max_depth_m),
+         args.masks_dir.empty() ? std::string("instances") : "instances: " + fs::path(args.masks_dir).filename().string()}));
   }
   cv::Mat sheet;
   cv::vconcat(rows, sheet);
@@ -75,6 +82,9 @@ void AddPreviewCommand(CLI::App& app, std::function<int()>* action) {
   command->add_option("--camera", args->camera_file,
                       "camera.yaml to use instead of the sequence's own (its depth_factor scales the depth "
                       "of a real sequence without one)");
+  command->add_option("--masks", args->masks_dir,
+                      "A folder of external masks (<stem>.png, e.g. from `masks import` or a run's refined_masks/) "
+                      "to overlay instead of the sequence's own masks/");
   command->callback([args, action] { *action = [args] { return RunPreview(*args); }; });
 }
 

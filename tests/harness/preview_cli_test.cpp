@@ -1,7 +1,8 @@
 // `segslam preview` on a generated sequence (fixture sim_datasets): the contact sheet has
 // one row per asked frame of colour | depth | instances, the colour tile is the frame
-// itself, a sequence without camera.yaml is read with --camera, and a frame out of range
-// is named with nothing written.
+// itself, a sequence without camera.yaml is read with --camera, a folder of external masks
+// is overlaid instead of the sequence's own, and a frame out of range or a missing mask is
+// named with nothing written.
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -80,6 +81,29 @@ TEST_F(PreviewCliTest, SequenceWithoutCameraYamlIsReadWithCamera) {
   ASSERT_EQ(original.exit_code, 0) << original.stderr_text;
   ASSERT_EQ(with_camera.exit_code, 0) << with_camera.stderr_text;
   EXPECT_EQ(ReadText(dir_ / "original.png"), ReadText(dir_ / "with_camera.png"));
+}
+
+TEST_F(PreviewCliTest, ExternalMasksAreOverlaidInsteadOfTheSequences) {
+  ASSERT_TRUE(fs::is_directory(kSequence)) << kSequence;
+  // Frame 39 with no detection: its instance tile is the colour frame as it is.
+  const fs::path masks = dir_ / "detections";
+  fs::create_directories(masks);
+  cv::imwrite((masks / "1.300000.png").string(), cv::Mat(kHeight, kWidth, CV_16UC1, cv::Scalar(0)));
+  const fs::path sheet_file = dir_ / "sheet.png";
+  const CommandOutput out = Run("preview " + kSequence.string() + " --frames 39 --masks " + masks.string() +
+                                " --out " + sheet_file.string());
+  ASSERT_EQ(out.exit_code, 0) << out.stderr_text;
+  const cv::Mat sheet = cv::imread(sheet_file.string(), cv::IMREAD_COLOR);
+  EXPECT_TRUE(SameImage(Tile(sheet, 0, 2), Tile(sheet, 0, 0)));
+
+  // Frame 0 has no file there: named, nothing written.
+  const CommandOutput missing = Run("preview " + kSequence.string() + " --frames 0 --masks " + masks.string() +
+                                    " --out " + (dir_ / "missing.png").string());
+  EXPECT_EQ(missing.exit_code, 1);
+  EXPECT_NE(missing.stderr_text.find((masks / "0.000000.png").string() + ": missing: the mask of frame 0"),
+            std::string::npos)
+      << missing.stderr_text;
+  EXPECT_FALSE(fs::exists(dir_ / "missing.png"));
 }
 
 TEST_F(PreviewCliTest, FrameOutOfRangeIsNamedAndNothingWritten) {
