@@ -121,6 +121,14 @@ int RunMasksImport(const MasksImportArgs& args) {
   options.images_file = args.images_file;
   const seg::CocoDetections detections = seg::CocoDetections::Read(args.detections_file, sequence, options);
 
+  // --force replaces the output folder: never the sequence or what it is made of.
+  const fs::path out = fs::weakly_canonical(args.out_dir);
+  for (const char* part : {"", "masks", "rgb", "depth"}) {
+    if (out == fs::weakly_canonical(sequence.dir() / part)) {
+      throw FileError(args.out_dir, fmt::format("is the sequence's own {}; write the masks elsewhere",
+                                                *part == '\0' ? std::string("folder") : std::string(part) + "/"));
+    }
+  }
   StagingDirectory staging(args.out_dir, args.force);
   const cv::Size size(sequence.camera().intrinsics.width, sequence.camera().intrinsics.height);
   ProgressBar bar("masks import " + fs::path(args.sequence_dir).filename().string());

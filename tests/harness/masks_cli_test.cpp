@@ -207,6 +207,15 @@ TEST_F(MasksCliTest, RefusedInputLeavesNoFolder) {
   EXPECT_NE(short_counts.stderr_text.find("RLE counts cover 0 pixels, a 640x480 mask has 307200"), std::string::npos)
       << short_counts.stderr_text;
   EXPECT_FALSE(fs::exists(masks));
+
+  // --force never replaces the sequence's own masks.
+  const CommandOutput onto_truth = Run("masks import " + sequence_.string() + " " + results_file.string() +
+                                       " --images " + (dir_ / "images.json").string() + " --out " +
+                                       (sequence_ / "masks").string() + " --force");
+  EXPECT_EQ(onto_truth.exit_code, 1);
+  EXPECT_NE(onto_truth.stderr_text.find("is the sequence's own masks/; write the masks elsewhere"), std::string::npos)
+      << onto_truth.stderr_text;
+  EXPECT_TRUE(fs::exists(sequence_ / "masks" / "0.000000.png"));
   for (const auto& entry : fs::directory_iterator(dir_)) {
     EXPECT_EQ(entry.path().filename().string().find(".masks.partial"), std::string::npos) << entry.path();
   }
