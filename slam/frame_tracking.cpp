@@ -122,6 +122,14 @@ bool Tracker::Impl::IsOccluded(const Eigen::Vector2d& uv, double z) const {
 // the whole map (a brute-force frustum test costs well under a millisecond per 10^5
 // points, and needs no covisibility graph). Returns the number of new matches.
 int Tracker::Impl::SearchLocalMap(double radius_factor) {
+  // The points already matched are in view too: counted, or FoundRatio() would read high
+  // for every point the earlier stages match and the culling would keep spurious ones.
+  for (MapPoint* point : current.points) {
+    if (point != nullptr && !point->bad && point->last_visible_frame != current.index) {
+      point->last_visible_frame = current.index;
+      ++point->visible_count;
+    }
+  }
   int matches = 0;
   const Eigen::Isometry3d T_wc = current.T_cw.inverse();
   const Eigen::Vector3d center = T_wc.translation();
@@ -161,7 +169,14 @@ int Tracker::Impl::SearchLocalMap(double radius_factor) {
   return matches;
 }
 
+// Forgets the matches of an attempt that failed, so the next attempt may match the same
+// points again.
 void Tracker::Impl::ClearMatches() {
+  for (const std::vector<MapPoint*>* matches : {&current.points, &current.rejected}) {
+    for (MapPoint* point : *matches) {
+      if (point != nullptr && point->last_matched_frame == current.index) point->last_matched_frame = -1;
+    }
+  }
   std::fill(current.points.begin(), current.points.end(), nullptr);
   std::fill(current.outlier.begin(), current.outlier.end(), false);
   std::fill(current.rejected.begin(), current.rejected.end(), nullptr);
@@ -231,16 +246,18 @@ bool Tracker::Impl::TrackLocalMap(int min_inliers, double radius_factor) {
 // Puts the first frame at options.initial_T_wc and fixes the close-point depth; the
 // keyframe follows in UpdateMaps(). False while the frame has too few features with depth.
 bool Tracker::Impl::InitializeMap() {
-  if (result.num_features_with_depth < options.min_initial_map_features) return false;
+  // Counted on the features left after DropMoveableFeatures(), not the frame's.
+  std::vector<float> depths;
+  for (float d : current.features.depth_m) {
+    if (d > 0) depths.push_back(d);
+  }
+  if (depths.empty() || static_cast<int>(depths.size()) < options.min_initial_map_features) return false;
   current.T_cw = options.initial_T_wc.inverse();
   initialized = true;
   pending_first_keyframe = true;
   if (options.close_depth_m > 0) {
     close_depth_m = options.close_depth_m;
   } else {
-    std::vector<float> depths;
-    for (float d : current.features.depth_m)
-      if (d > 0) depths.push_back(d);
     std::nth_element(depths.begin(), depths.begin() + depths.size() / 2, depths.end());
     close_depth_m = std::clamp(double(depths[depths.size() / 2]), 3.0, 25.0);
   }

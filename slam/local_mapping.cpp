@@ -32,8 +32,7 @@ bool Tracker::Impl::NeedNewKeyframe() const {
   }
   const bool need_close = tracked_close < 100 && untracked_close > 70;
   const bool few_tracked = inliers < options.keyframe_tracked_ratio * reference_points;
-  const bool long_ago = current.index - last_keyframe_frame >= options.max_frames_between_keyframes;
-  return ((few_tracked || need_close) && inliers > 15) || (long_ago && inliers > 15 && few_tracked);
+  return (few_tracked || need_close) && inliers > 15;
 }
 
 void Tracker::Impl::CreateKeyframe() {

@@ -277,7 +277,9 @@ LongTermMapData DecodePayload(const fs::path& file, const unsigned char* data,
 
 std::string ReadWholeFile(const fs::path& path) {
   std::error_code error;
-  if (!fs::exists(path, error)) throw FileError(path, "no such file");
+  const bool exists = fs::exists(path, error);
+  if (error) throw FileError(path, "cannot access: " + error.message());
+  if (!exists) throw FileError(path, "no such file");
   if (fs::is_directory(path, error)) throw FileError(path, "is a directory, not a map file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw FileError(path, std::string("cannot open: ") + std::strerror(errno));

@@ -1,8 +1,10 @@
 #include "slam/tracker.h"
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 
+#include <fmt/format.h>
 #include <opencv2/imgproc.hpp>
 
 #include "core/error.h"
@@ -78,10 +80,39 @@ std::vector<FeatureRecord> Tracker::Impl::FeatureRecords() const {
   return records;
 }
 
+namespace {
+
+// The options a wrong value would turn into a crash or into nonsense deep inside a run
+// (an infinite stereo weight, an empty first map), refused up front by name.
+void CheckTrackerOptions(const TrackerOptions& options) {
+  auto require = [](bool holds, const char* name, double value, const char* what) {
+    if (!holds) throw Error(fmt::format("tracker option {} = {}: {}", name, value, what));
+  };
+  require(options.depth_sigma_at_1m > 0 && std::isfinite(options.depth_sigma_at_1m), "depth_sigma_at_1m",
+          options.depth_sigma_at_1m, "must be a positive depth noise");
+  require(options.max_point_depth_m > 0, "max_point_depth_m", options.max_point_depth_m, "must be positive");
+  require(options.min_initial_map_features >= 1, "min_initial_map_features", options.min_initial_map_features,
+          "a map needs at least one point");
+  require(options.min_tracking_inliers >= 1, "min_tracking_inliers", options.min_tracking_inliers, "must be >= 1");
+  require(options.local_ba_keyframes >= 1, "local_ba_keyframes", options.local_ba_keyframes, "must be >= 1");
+  require(options.keyframe_tracked_ratio > 0 && options.keyframe_tracked_ratio <= 1, "keyframe_tracked_ratio",
+          options.keyframe_tracked_ratio, "must be in (0, 1]");
+  require(options.projection_ratio > 0 && options.projection_ratio <= 1, "projection_ratio", options.projection_ratio,
+          "must be in (0, 1]");
+  require(options.relocalization_ratio > 0 && options.relocalization_ratio <= 1, "relocalization_ratio",
+          options.relocalization_ratio, "must be in (0, 1]");
+  require(options.last_frame_radius_px > 0, "last_frame_radius_px", options.last_frame_radius_px, "must be positive");
+  require(options.local_map_radius_px > 0, "local_map_radius_px", options.local_map_radius_px, "must be positive");
+  require(options.motion_baseline_s >= 0, "motion_baseline_s", options.motion_baseline_s, "must be >= 0");
+}
+
+}  // namespace
+
 Tracker::Tracker(const PinholeCamera& camera, const TrackerOptions& options)
     : camera_(camera), options_(options), map_(std::make_unique<Map>()) {
   std::string error;
   if (!camera.IsValid(&error)) throw Error("tracker: invalid camera: " + error);
+  CheckTrackerOptions(options_);
   impl_ = std::make_unique<Impl>(camera_, options_, map_.get());
 }
 

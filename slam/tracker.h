@@ -154,10 +154,10 @@ struct TrackerOptions {
   int min_tracking_inliers = 30;
   int min_relocalization_inliers = 50;
   // Keyframes (ORB-SLAM2 RGB-D rules): a new one when the tracked inliers fall below
-  // this share of the reference keyframe's points, or too few close points are tracked,
-  // or after max_frames_between_keyframes.
+  // this share of the reference keyframe's points, or too few close points are tracked
+  // (and more than 15 are: ORB-SLAM2's frame-count rules only ever add to these, with
+  // its mapping thread idle, so none is needed here).
   double keyframe_tracked_ratio = 0.75;
-  int max_frames_between_keyframes = 30;
   // Depth under which a point counts as "close" (accurately measured); 0 = take the
   // median feature depth of the first frame, clamped to [3, 25] m.
   double close_depth_m = 0;

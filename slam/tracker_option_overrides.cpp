@@ -35,7 +35,6 @@ const NamedOptionTable<TrackerOptions>& Table() {
       SEGSLAM_INT(min_tracking_inliers),
       SEGSLAM_INT(min_relocalization_inliers),
       SEGSLAM_REAL(keyframe_tracked_ratio),
-      SEGSLAM_INT(max_frames_between_keyframes),
       SEGSLAM_REAL(close_depth_m),
       SEGSLAM_BOOL(local_bundle_adjustment),
       SEGSLAM_INT(local_ba_keyframes),

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <optional>
 #include <vector>
 
@@ -230,6 +231,52 @@ TEST(TrackerTest, MutualBeginsNoMapOnAViewOfUnjudgedMoveableObjects) {
     }
   }
   EXPECT_GE(mutual.map().keyframes().size(), 1u);
+}
+
+// mask-moveable drops every feature on the crate: the frame has many features with depth,
+// none left for a map, and no map begins on it (it used to take the median depth of none).
+TEST(TrackerTest, MaskMoveableBeginsNoMapWhenEveryFeatureIsOnAMoveableObject) {
+  const PinholeCamera camera = TestCamera();
+  const auto room = RoomQuads(6);
+  const auto with_crate = WithCrateInFront(room, 1);
+  FrameInstances instances;
+  instances.moveable_ids = {1};
+  Tracker tracker(camera, StartingAt(PathPose(0)));
+  for (int i = 0; i < 4; ++i) {
+    const auto rendered = RenderQuads(i < 2 ? with_crate : room, camera, PathPose(i), i, i / 30.0);
+    instances.ids = rendered.instance_ids;
+    const FrameResult result = tracker.Track(rendered.frame, &instances, SlamMode::kMaskMoveable);
+    if (i < 2) {
+      EXPECT_GE(result.num_features_with_depth, tracker.options().min_initial_map_features) << "frame " << i;
+      EXPECT_EQ(result.status, TrackingStatus::kLost) << "frame " << i;
+      EXPECT_TRUE(tracker.map().points().empty()) << "frame " << i;
+    } else {
+      EXPECT_EQ(result.status, TrackingStatus::kTracking) << "frame " << i;
+    }
+  }
+}
+
+TEST(TrackerTest, OptionsThatCannotWorkAreRefusedByName) {
+  const PinholeCamera camera = TestCamera();
+  auto error_of = [&](const std::function<void(TrackerOptions*)>& spoil) {
+    TrackerOptions options;
+    spoil(&options);
+    try {
+      Tracker tracker(camera, options);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("(no error)");
+  };
+  EXPECT_NE(error_of([](TrackerOptions* o) { o->depth_sigma_at_1m = 0; }).find("depth_sigma_at_1m"),
+            std::string::npos);
+  EXPECT_NE(error_of([](TrackerOptions* o) { o->min_initial_map_features = 0; }).find("min_initial_map_features"),
+            std::string::npos);
+  EXPECT_NE(error_of([](TrackerOptions* o) { o->keyframe_tracked_ratio = 1.5; }).find("keyframe_tracked_ratio"),
+            std::string::npos);
+  EXPECT_NE(error_of([](TrackerOptions* o) { o->local_ba_keyframes = 0; }).find("local_ba_keyframes"),
+            std::string::npos);
+  EXPECT_EQ(error_of([](TrackerOptions*) {}), "(no error)");
 }
 
 TEST(TrackerTest, LocalizesOnALoadedLongTermMapWithoutChangingIt) {
