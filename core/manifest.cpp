@@ -90,10 +90,15 @@ std::vector<std::string> VerifyManifest(const std::filesystem::path& dir) {
     return {manifest_path.string() + ": not valid JSON: " + e.what()};
   }
   std::map<std::string, ManifestEntry> listed;
-  for (const auto& file : manifest.value("files", nlohmann::json::array())) {
-    ManifestEntry entry{file.value("path", ""), file.value("size", std::uintmax_t{0}),
-                        file.value("sha256", "")};
-    listed[entry.path] = entry;
+  try {
+    for (const auto& file : manifest.value("files", nlohmann::json::array())) {
+      ManifestEntry entry{file.value("path", ""), file.value("size", std::uintmax_t{0}),
+                          file.value("sha256", "")};
+      listed[entry.path] = entry;
+    }
+  } catch (const nlohmann::json::exception& e) {
+    return {manifest_path.string() + ": not a manifest (expected {\"files\": [{\"path\", \"size\", "
+                                     "\"sha256\"}, ...]}): " + e.what()};
   }
   std::vector<std::string> problems;
   std::set<std::string> seen;

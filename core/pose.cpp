@@ -18,20 +18,35 @@ namespace {
 // anything beyond this is a corrupt line, not rounding.
 constexpr double kMaxQuaternionNormError = 1e-2;
 
-// Strict number parse: the whole token must be a finite number.
-bool ParseFiniteDouble(const std::string& token, double* value) {
-  if (token.empty()) return false;
+}  // namespace
+
+std::vector<std::string> SplitTumFields(const std::string& line) {
+  std::vector<std::string> fields;
+  std::string field;
+  for (const char c : line) {
+    if (c == ' ' || c == ',' || c == '\t' || c == '\r' || c == '\n') {
+      if (!field.empty()) fields.push_back(std::move(field));
+      field.clear();
+    } else {
+      field.push_back(c);
+    }
+  }
+  if (!field.empty()) fields.push_back(std::move(field));
+  return fields;
+}
+
+bool ParseTumNumber(const std::string& token, double* value) {
+  // strtod also reads hexadecimal ("0x1p3"), which Python's float() refuses.
+  if (token.empty() || token.find_first_of("xX") != std::string::npos) return false;
   errno = 0;
   char* end = nullptr;
   const double v = std::strtod(token.c_str(), &end);
-  if (end != token.c_str() + token.size() || errno == ERANGE || !std::isfinite(v)) {
-    return false;
-  }
+  if (end != token.c_str() + token.size() || !std::isfinite(v)) return false;
+  // ERANGE also flags underflow (1e-310), which float() reads; only overflow is an error.
+  if (errno == ERANGE && std::abs(v) == HUGE_VAL) return false;
   *value = v;
   return true;
 }
-
-}  // namespace
 
 std::string FormatTumPoseLine(const StampedPose& pose) {
   Eigen::Quaterniond q(pose.T_wc.rotation());
@@ -44,9 +59,7 @@ std::string FormatTumPoseLine(const StampedPose& pose) {
 }
 
 StampedPose ParseTumPoseLine(const std::string& line, const std::string& origin_for_errors) {
-  std::istringstream stream(line);
-  std::vector<std::string> tokens;
-  for (std::string token; stream >> token;) tokens.push_back(token);
+  const std::vector<std::string> tokens = SplitTumFields(line);
   if (tokens.size() != 8) {
     throw Error(fmt::format(
         "{}: expected 8 fields 'timestamp tx ty tz qx qy qz qw', found {}",
@@ -55,7 +68,7 @@ StampedPose ParseTumPoseLine(const std::string& line, const std::string& origin_
   double v[8];
   static const char* const kNames[8] = {"timestamp", "tx", "ty", "tz", "qx", "qy", "qz", "qw"};
   for (int i = 0; i < 8; ++i) {
-    if (!ParseFiniteDouble(tokens[i], &v[i])) {
+    if (!ParseTumNumber(tokens[i], &v[i])) {
       throw Error(fmt::format("{}: field {} ({}) is not a finite number: '{}'",
                               origin_for_errors, i + 1, kNames[i], tokens[i]));
     }

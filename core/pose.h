@@ -29,7 +29,16 @@ struct StampedPose {
 // (normalized, sign chosen so that qw >= 0) as %.9f.
 std::string FormatTumPoseLine(const StampedPose& pose);
 
-// Parses one TUM line (8 whitespace-separated numbers). The quaternion is normalized;
+// The fields of a line of a TUM text file as TUM's scripts split it (associate.py's
+// read_file_list): commas and tabs count as spaces, empty fields are dropped.
+std::vector<std::string> SplitTumFields(const std::string& line);
+
+// A number as TUM's Python scripts read one (float()), and finite: decimal or scientific
+// notation, tiny (subnormal) values included; false for anything else (hex floats, NaN,
+// inf, overflow, trailing characters).
+bool ParseTumNumber(const std::string& token, double* value);
+
+// Parses one TUM line (8 numbers, split as SplitTumFields does). The quaternion is normalized;
 // its norm must lie within 1 +- 1e-2 (files store a few digits only, so small deviations
 // are normal; large ones mean a corrupt line). Throws segslam::Error whose message starts
 // with `origin_for_errors` (e.g. "traj.txt:12") on wrong field count, a non-number,

@@ -18,16 +18,6 @@
 namespace segslam {
 namespace {
 
-bool ParseFiniteDouble(const std::string& token, double* value) {
-  if (token.empty()) return false;
-  errno = 0;
-  char* end = nullptr;
-  const double v = std::strtod(token.c_str(), &end);
-  if (end != token.c_str() + token.size() || errno == ERANGE || !std::isfinite(v)) return false;
-  *value = v;
-  return true;
-}
-
 // Calls `on_line(tokens, origin)` for each non-comment, non-blank line of a text file.
 template <typename OnLine>
 void ForEachDataLine(const std::filesystem::path& path, OnLine on_line) {
@@ -40,17 +30,14 @@ void ForEachDataLine(const std::filesystem::path& path, OnLine on_line) {
   for (int line_number = 1; std::getline(file, line); ++line_number) {
     const size_t first = line.find_first_not_of(" \t\r");
     if (first == std::string::npos || line[first] == '#') continue;
-    std::istringstream stream(line);
-    std::vector<std::string> tokens;
-    for (std::string token; stream >> token;) tokens.push_back(token);
-    on_line(tokens, fmt::format("{}:{}", path.string(), line_number));
+    on_line(SplitTumFields(line), fmt::format("{}:{}", path.string(), line_number));
   }
   if (file.bad()) throw FileError(path, "read error");
 }
 
 double ParseStamp(const std::string& token, const std::string& origin) {
   double stamp = 0;
-  if (!ParseFiniteDouble(token, &stamp)) {
+  if (!ParseTumNumber(token, &stamp)) {
     throw Error(fmt::format("{}: timestamp '{}' is not a finite number", origin, token));
   }
   return stamp;
@@ -91,7 +78,7 @@ SequenceCamera ReadCameraYaml(const std::filesystem::path& path) {
     const YAML::Node node = root[key];
     if (!node) throw FileError(path, std::string("missing key '") + key + "'");
     double value = 0;
-    if (!node.IsScalar() || !ParseFiniteDouble(node.Scalar(), &value)) {
+    if (!node.IsScalar() || !ParseTumNumber(node.Scalar(), &value)) {
       throw FileError(path, std::string("key '") + key + "' must be a finite number");
     }
     return value;
@@ -183,8 +170,10 @@ std::vector<TumFrameEntry> AssociateByTimestamp(
   std::vector<Candidate> candidates;
   for (size_t i = 0; i < rgb.size(); ++i) {
     const double a = rgb[i].first;
-    auto it = std::lower_bound(depth_sorted.begin(), depth_sorted.end(), a - max_difference_s);
-    for (; it != depth_sorted.end() && *it < a + max_difference_s; ++it) {
+    // A window twice as wide as the test, so that rounding of a +- max_difference_s at
+    // large stamps (1.3e9 s) cannot cut off a pair whose difference passes the test.
+    auto it = std::lower_bound(depth_sorted.begin(), depth_sorted.end(), a - 2 * max_difference_s);
+    for (; it != depth_sorted.end() && *it < a + 2 * max_difference_s; ++it) {
       const double diff = std::abs(a - *it);
       if (diff < max_difference_s) {
         const size_t k = static_cast<size_t>(it - depth_sorted.begin());
@@ -248,7 +237,11 @@ SequenceCamera ResolveSequenceCamera(const std::filesystem::path& dir,
   return *known;
 }
 
-std::vector<TumFrameEntry> ReadAssociations(const std::filesystem::path& associations) {
+
+}  // namespace
+
+
+std::vector<TumFrameEntry> ReadTumAssociations(const std::filesystem::path& associations) {
   std::vector<TumFrameEntry> entries;
   ForEachDataLine(associations, [&](const std::vector<std::string>& tokens,
                                     const std::string& origin) {
@@ -267,13 +260,15 @@ std::vector<TumFrameEntry> ReadAssociations(const std::filesystem::path& associa
   return entries;
 }
 
+namespace {
+
 // Frames: associations.txt if present (then rgb.txt/depth.txt are not needed), else
 // associate rgb.txt with depth.txt as TUM's associate.py does. Every listed image must exist.
-std::vector<TumFrameEntry> ReadFrameEntries(const std::filesystem::path& dir) {
+std::vector<TumFrameEntry> ReadTumFrames(const std::filesystem::path& dir) {
   const std::filesystem::path associations = dir / "associations.txt";
   std::vector<TumFrameEntry> entries;
   if (std::filesystem::exists(associations)) {
-    entries = ReadAssociations(associations);
+    entries = ReadTumAssociations(associations);
   } else {
     for (const char* list : {"rgb.txt", "depth.txt"}) {
       if (!std::filesystem::exists(dir / list)) {
@@ -315,7 +310,7 @@ TumSequence TumSequence::Open(const std::filesystem::path& dir,
   TumSequence sequence;
   sequence.dir_ = dir;
   sequence.camera_ = ResolveSequenceCamera(dir, camera);
-  sequence.entries_ = ReadFrameEntries(dir);
+  sequence.entries_ = ReadTumFrames(dir);
   const std::filesystem::path groundtruth = dir / "groundtruth.txt";
   if (std::filesystem::exists(groundtruth)) {
     sequence.groundtruth_ = ReadTumTrajectory(groundtruth);

@@ -70,6 +70,10 @@ std::vector<TumFrameEntry> AssociateByTimestamp(
 // skipped). Throws on a malformed line, NaN or non-increasing stamps, naming file:line.
 std::vector<std::pair<double, std::string>> ReadTumFileList(const std::filesystem::path& path);
 
+// Reads associations.txt ("rgb_stamp rgb_file depth_stamp depth_file" per line, rgb
+// stamps increasing; the images are not checked). Throws naming file:line.
+std::vector<TumFrameEntry> ReadTumAssociations(const std::filesystem::path& associations);
+
 // A TUM-layout sequence opened for reading. Copyable value (lists, and for a distorted
 // camera the undistortion maps, shared between copies).
 class TumSequence {

@@ -113,15 +113,25 @@ nlohmann::json NumberJson(double value) { return std::isnan(value) ? nlohmann::j
 // Every frame the run logged must be a frame of the dataset's sequence; each gets its
 // rgb file (whose stem names its masks).
 void MatchToSequence(const fs::path& frame_log, std::vector<LoggedFrame>& frames, const fs::path& sequence_dir) {
-  const std::vector<std::pair<double, std::string>> rgb = ReadTumFileList(sequence_dir / "rgb.txt");
+  // The frames' stamps and colour files as the run read them: associations.txt when the
+  // sequence has one (then it needs no rgb.txt), else rgb.txt.
+  std::vector<TumFrameEntry> sequence_frames;
+  if (fs::exists(sequence_dir / "associations.txt")) {
+    sequence_frames = ReadTumAssociations(sequence_dir / "associations.txt");
+  } else {
+    for (const auto& [stamp, file] : ReadTumFileList(sequence_dir / "rgb.txt")) {
+      sequence_frames.push_back({stamp, file, stamp, ""});
+    }
+  }
   for (LoggedFrame& frame : frames) {
-    const auto above = std::lower_bound(rgb.begin(), rgb.end(), frame.stamp_s - kStampToleranceS,
-                                        [](const auto& entry, double stamp) { return entry.first < stamp; });
-    if (above == rgb.end() || std::abs(above->first - frame.stamp_s) > kStampToleranceS) {
+    const auto above = std::lower_bound(
+        sequence_frames.begin(), sequence_frames.end(), frame.stamp_s - kStampToleranceS,
+        [](const TumFrameEntry& entry, double stamp) { return entry.rgb_stamp_s < stamp; });
+    if (above == sequence_frames.end() || std::abs(above->rgb_stamp_s - frame.stamp_s) > kStampToleranceS) {
       throw Error(fmt::format("eval: {}: frame {} (stamp {:.6f}) is not a frame of {}: the run is of another sequence",
                               frame_log.string(), frame.index, frame.stamp_s, sequence_dir.string()));
     }
-    frame.rgb_file = above->second;
+    frame.rgb_file = above->rgb_file;
   }
 }
 

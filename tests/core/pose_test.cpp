@@ -63,6 +63,18 @@ TEST(TumPoseLine, ParseErrors) {
   EXPECT_NEAR(Eigen::Quaterniond(pose.T_wc.rotation()).norm(), 1.0, 1e-12);
 }
 
+// Lines as TUM's scripts read them: commas and tabs separate fields too; numbers as
+// Python's float() reads them (tiny values yes, hexadecimal no).
+TEST(TumPoseLine, ReadsWhatTheTumScriptsRead) {
+  const StampedPose commas = ParseTumPoseLine("1.5,0.25,\t0,0, 0,0,0,1", "o");
+  EXPECT_EQ(commas.stamp_s, 1.5);
+  EXPECT_EQ(commas.T_wc.translation().x(), 0.25);
+  EXPECT_EQ(ParseTumPoseLine("1 1e-310 0 0 0 0 0 1", "o").T_wc.translation().x(), 1e-310);
+  EXPECT_NE(ErrorMessage([] { ParseTumPoseLine("1 0x1p3 0 0 0 0 0 1", "o"); }).find("tx"), std::string::npos);
+  EXPECT_NE(ErrorMessage([] { ParseTumPoseLine("1 1e999 0 0 0 0 0 1", "o"); }).find("tx"), std::string::npos);
+  EXPECT_EQ(SplitTumFields(" a,b\t c  d,,e "), (std::vector<std::string>{"a", "b", "c", "d", "e"}));
+}
+
 class TumTrajectoryTest : public testing::TempDirTest {
  protected:
   std::filesystem::path WriteText(const std::string& text) {

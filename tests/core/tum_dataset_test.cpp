@@ -127,6 +127,17 @@ TEST(AssociateByTimestamp, GreedyByDifferenceLikeAssociatePy) {
   EXPECT_EQ(AssociateByTimestamp(rgb, depth, 0.01).size(), 1u);
 }
 
+// At TUM's stamps (1.3e9 s) a + 0.02 rounds; a pair |a - b| < 0.02 as Python computes
+// it must still be found (1305031236.384244 - 1305031236.364244 is 0.0199999809 in
+// doubles, so associate.py pairs them).
+TEST(AssociateByTimestamp, PairsJustUnderTheLimitAtLargeStamps) {
+  const std::vector<std::pair<double, std::string>> rgb = {{1305031236.364244, "r"}};
+  const std::vector<std::pair<double, std::string>> depth = {{1305031236.384244, "d"}};
+  ASSERT_LT(std::abs(rgb[0].first - depth[0].first), 0.02);
+  EXPECT_EQ(AssociateByTimestamp(rgb, depth, 0.02).size(), 1u);
+  EXPECT_EQ(AssociateByTimestamp(depth, rgb, 0.02).size(), 1u);
+}
+
 TEST_F(TumDatasetTest, WriterThenOpenRoundTrip) {
   const SequenceCamera camera = SmallCamera();
   const auto seq_dir = dir() / "seq";

@@ -93,6 +93,24 @@ TEST_F(EvalCliTest, DatasetWithoutGroundTruthIsOneLine) {
       << eval.stderr_text;
 }
 
+// A sequence that lists its frames in associations.txt only (no rgb.txt, depth.txt), as
+// TumSequence reads one, is scored as well as run.
+TEST_F(EvalCliTest, SequenceWithOnlyAssociationsIsScored) {
+  const fs::path original = kDataDir / "office_seg" / "pass1";
+  ASSERT_TRUE(fs::is_directory(original)) << original << " missing: ctest's sim_datasets fixture makes it";
+  const fs::path sequence = dir_ / "sequence";
+  fs::create_directories(sequence);
+  for (const char* file : {"associations.txt", "groundtruth.txt", "camera.yaml"}) {
+    fs::copy_file(original / file, sequence / file);
+  }
+  for (const char* folder : {"rgb", "depth"}) fs::create_directory_symlink(original / folder, sequence / folder);
+  const CommandOutput run =
+      Run("run " + sequence.string() + " --mode plain --frames 15 -q --out " + (dir_ / "run").string());
+  ASSERT_EQ(run.exit_code, 0) << run.stderr_text;
+  const CommandOutput eval = Run("eval " + (dir_ / "run").string() + " --dataset " + sequence.string());
+  EXPECT_EQ(eval.exit_code, 0) << eval.stderr_text;
+}
+
 TEST_F(EvalCliTest, RunFolderWithoutTrajectoryIsOneLine) {
   const fs::path dataset = kDataDir / "office_seg";
   ASSERT_TRUE(fs::is_directory(dataset)) << dataset << " missing: ctest's sim_datasets fixture makes it";
