@@ -135,15 +135,15 @@ CocoDetections CocoDetections::Read(const fs::path& file, const TumSequence& seq
     }
 
     std::string stem;
-    if (images.has_value()) {
-      const auto listed = images->stem_of.find(IdText(image_id));
-      if (listed == images->stem_of.end()) {
-        throw Error(fmt::format("{}: image_id {} is not in the image list of {}", where, IdText(image_id),
-                                images->origin));
-      }
+    const auto listed = images.has_value() ? images->stem_of.find(IdText(image_id))
+                                           : std::unordered_map<std::string, std::string>::const_iterator();
+    if (images.has_value() && listed != images->stem_of.end()) {
       stem = listed->second;
     } else if (image_id.is_string()) {
       stem = image_id.get<std::string>();
+    } else if (images.has_value()) {
+      throw Error(fmt::format("{}: image_id {} is not in the image list of {}", where, IdText(image_id),
+                              images->origin));
     } else {
       throw Error(where + ": an integer image_id needs the image list the segmenter ran on (--images FILE; "
                           "`segslam masks images` writes one for a sequence)");
@@ -164,7 +164,8 @@ CocoDetections CocoDetections::Read(const fs::path& file, const TumSequence& seq
       }
       detection.score = score.get<float>();
     }
-    if (detection.score < options.min_score) {
+    // On the score as written: 0.7f is below 0.7.
+    if (entry.contains("score") && entry.at("score").get<double>() < options.min_score) {
       ++counts.below_min_score;
       continue;
     }

@@ -16,8 +16,9 @@
 // ("images": [{"id", "file_name"}, ...]: the dataset file's own, or the file given as
 // CocoImportOptions::images_file, e.g. what `segslam masks images` wrote), and the stem
 // of its file_name is matched to the stem of a frame's colour file
-// (rgb/1305031102.175304.png -> 1305031102.175304); a string image_id is such a stem
-// itself (ultralytics writes the file's stem where it is not a number). Detections on
+// (rgb/1305031102.175304.png -> 1305031102.175304); a string image_id that the list does
+// not hold is such a stem itself (ultralytics writes the file's stem where it is not a
+// number). Detections on
 // images of the list that are not frames of this sequence are counted and skipped.
 //
 // Categories: category_id is read through the "categories" of the file that has the

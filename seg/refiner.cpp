@@ -766,14 +766,16 @@ RefinementResult SegmentationRefiner::Refine(const RefinerInput& in) {
                           previous.instances[static_cast<size_t>(match->p)], in.current_depth_m, &instance, &d);
     } else {
       d.kind = RegionDecision::Kind::kNew;
-      instance.track_id = FreshId();
       instance.score = static_cast<float>(instance.score * options_.new_region_score_factor);
       if (instance.score < options_.min_new_region_score) {
+        // No track id: dropped regions would use them up (65534) on a long sequence of
+        // low-scoring detections.
         d.kind = RegionDecision::Kind::kDropped;
-        d.track_id = instance.track_id;
+        d.track_id = 0;
         result.decisions.push_back(d);
         continue;
       }
+      instance.track_id = FreshId();
     }
     d.track_id = instance.track_id;
     result.decisions.push_back(d);

@@ -250,7 +250,7 @@ struct RegionDecision {
                 // a new current region under min_new_region_score
   };
   Kind kind = Kind::kNew;
-  std::uint16_t track_id = 0;   // id in the refined output (kDropped: the previous id)
+  std::uint16_t track_id = 0;   // id in the refined output (kDropped: the previous id; 0 for a new region)
   int current_index = -1;       // index in current_initial.instances, -1 if none
   int previous_index = -1;      // index in previous_refined->instances, -1 if none
   double cost = -1;             // S of the match, -1 if unmatched

@@ -120,6 +120,18 @@ TEST_F(CocoDetectionsTest, IntegerImageIdsAndOwnCategoriesThroughAnImageList) {
   ASSERT_EQ(detections.Frame(2).instances.size(), 1u);
   EXPECT_EQ(detections.Frame(2).instances[0].category_id, 10);  // traffic light
 
+  // A string image id the list does not hold is a stem (ultralytics' ids beside an image
+  // list), and a score equal to the threshold is kept.
+  json mixed = results;
+  mixed.push_back({{"image_id", Stem(1)}, {"category_id", 0}, {"segmentation", CompressedRle(Box({2, 2, 3, 3}))},
+                   {"score", 0.7}});
+  CocoImportOptions at_threshold = options;
+  at_threshold.min_score = 0.7;
+  const CocoDetections with_stem = CocoDetections::Read(Write("mixed.json", mixed), sequence_, at_threshold);
+  ASSERT_EQ(with_stem.Frame(1).instances.size(), 1u);
+  EXPECT_EQ(with_stem.Frame(1).instances[0].category_id, 1);
+  EXPECT_EQ(with_stem.counts().below_min_score, 1);  // image 12's 0.6
+
   // Without the list an integer image id cannot be placed.
   EXPECT_NE(ReadError(results_file).find("detection 0 (image_id 12): an integer image_id needs the image list"),
             std::string::npos);

@@ -286,6 +286,27 @@ TEST(SegmentationRefinerTest, RepairsKeepsCarriesIdsAndAddsMissed) {
   EXPECT_EQ(Differences(r.refined.instances[2].mask, RectMask(scene.person_b)), 0);
 }
 
+// A new region scoring under min_new_region_score is dropped without a track id, so a
+// long run of weak detections cannot use the 65534 ids up.
+TEST(SegmentationRefinerTest, DroppedNewRegionsTakeNoTrackId) {
+  const Scene scene;
+  FrameSegmentation current;
+  current.instances.push_back(Instance(1, 62, RectMask(scene.chair), 0.85f));
+  current.instances.push_back(Instance(2, 44, RectMask(cv::Rect(300, 400, 30, 30)), 0.1f));  // weak, new
+  current.instances.push_back(Instance(3, 47, RectMask(cv::Rect(200, 20, 30, 30)), 0.9f));   // strong, new
+  SegmentationRefiner refiner;
+  const RefinementResult r = refiner.Refine(scene.Input(current));
+  SCOPED_TRACE(r.BriefReport());
+  ASSERT_GE(r.decisions.size(), 3u);  // the current regions' decisions first, in order
+  EXPECT_EQ(r.decisions[1].kind, RegionDecision::Kind::kDropped);
+  EXPECT_EQ(r.decisions[1].track_id, 0);
+  EXPECT_EQ(r.decisions[2].kind, RegionDecision::Kind::kNew);
+  // The previous frame's ids go up to 9: the strong region takes the next one.
+  EXPECT_EQ(r.decisions[2].track_id, 10);
+  ASSERT_NE(FindTrack(r.refined, 10), nullptr);
+  EXPECT_EQ(FindTrack(r.refined, 10)->category_id, 47);
+}
+
 TEST(SegmentationRefinerTest, PaperRuleShrinksOversizedAndKeepsCutOff) {
   const Scene scene;
   FrameSegmentation current;
