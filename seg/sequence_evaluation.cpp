@@ -2,9 +2,12 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <map>
 #include <optional>
 #include <vector>
+
+#include <fmt/format.h>
 
 #include "core/error.h"
 #include "core/image_io.h"
@@ -69,6 +72,17 @@ SequenceSegEval EvaluateSequenceWithGroundTruthPoses(const SegEvalOptions& optio
   if (!sequence.has_groundtruth() || sequence.groundtruth().size() != sequence.size()) {
     throw FileError(dir / "groundtruth.txt",
                     "seg-eval needs one ground-truth pose per frame (--poses gt)");
+  }
+  // Pose i is frame i's: at its stamp (a motion-capture trajectory at its own rate,
+  // cut to the same count, would pair poses with the wrong frames).
+  for (size_t i = 0; i < sequence.size(); ++i) {
+    const double frame_stamp = sequence.entries()[i].rgb_stamp_s;
+    if (std::abs(sequence.groundtruth()[i].stamp_s - frame_stamp) > 1e-3) {
+      throw FileError(dir / "groundtruth.txt",
+                      fmt::format("pose {} is at {:.6f} s, frame {} at {:.6f} s: seg-eval needs one ground-truth "
+                                  "pose per frame, at the frame's stamp (--poses gt)",
+                                  i, sequence.groundtruth()[i].stamp_s, i, frame_stamp));
+    }
   }
   const InstanceTable instances = InstanceTable::Read(dir / "instances.json");
   std::optional<TrackIndex> track_of;

@@ -180,4 +180,34 @@ TEST_F(SegEvalCliTest, RefusedInputIsNamedAndLeavesNoOutputFolder) {
       << missing.stderr_text;
 }
 
+// One pose per frame, but at other stamps (a trajectory cut to the frame count): refused,
+// naming the pose and the frame, instead of pairing poses with the wrong frames.
+TEST_F(SegEvalCliTest, GroundTruthAtOtherStampsIsRefused) {
+  const fs::path original = kDataDir / "office_clean" / "pass1";
+  ASSERT_TRUE(fs::is_directory(original)) << original;
+  const fs::path sequence = dir_ / "sequence";
+  fs::create_directories(sequence);
+  for (const auto& entry : fs::directory_iterator(original)) {
+    if (entry.is_directory()) {
+      fs::create_directory_symlink(entry.path(), sequence / entry.path().filename());
+    } else if (entry.path().filename() != "groundtruth.txt") {
+      fs::copy_file(entry.path(), sequence / entry.path().filename());
+    }
+  }
+  // The same poses, 0.25 s later each.
+  std::ifstream in(original / "groundtruth.txt");
+  std::ofstream out(sequence / "groundtruth.txt");
+  for (std::string line; std::getline(in, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    const size_t space = line.find(' ');
+    out << std::fixed << std::stod(line.substr(0, space)) + 0.25 << line.substr(space) << "\n";
+  }
+  out.close();
+  const CommandOutput refused = Run("seg-eval " + sequence.string() + " --out " + (dir_ / "out").string());
+  EXPECT_EQ(refused.exit_code, 1);
+  EXPECT_NE(refused.stderr_text.find("pose 0 is at 0.250000 s, frame 0 at 0.000000 s"), std::string::npos)
+      << refused.stderr_text;
+  EXPECT_FALSE(fs::exists(dir_ / "out"));
+}
+
 }  // namespace
