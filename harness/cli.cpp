@@ -9,6 +9,7 @@
 #include <spdlog/spdlog.h>
 
 #include <cstdio>
+#include <filesystem>
 
 namespace segslam::harness {
 
@@ -40,6 +41,10 @@ int RunCli(int argc, char** argv) {
   try {
     return action ? action() : 0;
   } catch (const Error& e) {
+    std::fprintf(stderr, "segslam: error: %s\n", e.what());
+    return InterruptRequested() ? 130 : 1;
+  } catch (const std::filesystem::filesystem_error& e) {
+    // A folder that cannot be made or read: the user's to fix, not an internal error.
     std::fprintf(stderr, "segslam: error: %s\n", e.what());
     return InterruptRequested() ? 130 : 1;
   } catch (const std::exception& e) {

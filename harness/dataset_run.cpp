@@ -18,10 +18,14 @@ std::string SimulatedSegmenterLabel(const std::string& preset, double strength) 
 
 namespace {
 
+// `fixed_alignment`: score the ATE in that frame (pass 2 in pass 1's map frame); without
+// one, align (Horn), unless `in_map_frame` says there is no map frame to score in.
 PassRun RunPass(const DatasetRunOptions& args, const std::string& name, const fs::path& sequence_dir,
                 const fs::path& map_in, const fs::path& map_out, const fs::path& out_dir,
-                const std::optional<Eigen::Isometry3d>& fixed_alignment) {
+                const std::optional<Eigen::Isometry3d>& fixed_alignment, bool in_map_frame = false) {
   const TumSequence sequence = TumSequence::OpenWithCameraFile(sequence_dir, args.camera_file);
+  // What an earlier run of another kind left here would be read as this run's.
+  for (const char* stale : {"seg.json", "refined_masks"}) fs::remove_all(out_dir / stale);
   SlamRunOptions options;
   options.mode = slam::ParseSlamMode(args.mode);
   options.masks = args.masks;
@@ -38,7 +42,7 @@ PassRun RunPass(const DatasetRunOptions& args, const std::string& name, const fs
   };
   PassRun outcome;
   outcome.name = name;
-  outcome.aligned = !fixed_alignment.has_value();
+  outcome.aligned = !fixed_alignment.has_value() && !in_map_frame;
   outcome.run = RunSlamOnSequence(sequence, options);
 
   fs::create_directories(out_dir);
@@ -80,7 +84,7 @@ PassRun RunPass(const DatasetRunOptions& args, const std::string& name, const fs
     ply.replace_extension(".ply");
     slam::ExportPly(ply, outcome.run.long_term_map);
   }
-  if (sequence.has_groundtruth() && outcome.run.trajectory.size() >= 3) {
+  if (sequence.has_groundtruth() && outcome.run.trajectory.size() >= 3 && !(in_map_frame && !fixed_alignment)) {
     AteOptions ate_options;
     std::vector<StampedPose> estimate = outcome.run.trajectory;
     if (fixed_alignment.has_value()) {
@@ -130,10 +134,11 @@ std::vector<PassRun> RunDataset(const fs::path& dataset, const fs::path& out_dir
     fs::create_directories(map1.parent_path().empty() ? fs::path(".") : map1.parent_path());
     passes.push_back(RunPass(options, "pass1", dataset / "pass1", {}, map1, out_dir / "pass1", std::nullopt));
     // Pass 2 is scored in the map's frame: pass 1's alignment to the ground truth, not
-    // a new one (the paper's Table III).
+    // a new one (the paper's Table III); without it, not at all.
     std::optional<Eigen::Isometry3d> alignment;
     if (passes[0].ate.has_value()) alignment = passes[0].ate->T_gt_est;
-    passes.push_back(RunPass(options, "pass2", dataset / "pass2", map1, {}, out_dir / "pass2", alignment));
+    passes.push_back(RunPass(options, "pass2", dataset / "pass2", map1, {}, out_dir / "pass2", alignment,
+                             /*in_map_frame=*/true));
   } else {
     passes.push_back(RunPass(options, dataset.filename().string(), dataset, options.map_in, options.map_out, out_dir,
                              std::nullopt));

@@ -16,7 +16,8 @@ nlohmann::json MachineDescription() {
   for (std::string line; std::getline(cpuinfo, line);) {
     if (line.rfind("model name", 0) == 0) {
       const auto colon = line.find(':');
-      if (colon != std::string::npos) cpu_model = line.substr(line.find_first_not_of(' ', colon + 1));
+      const auto value = colon == std::string::npos ? std::string::npos : line.find_first_not_of(' ', colon + 1);
+      if (value != std::string::npos) cpu_model = line.substr(value);
       break;
     }
   }

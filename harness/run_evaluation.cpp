@@ -479,9 +479,17 @@ RunEvaluation EvaluateRun(const fs::path& run_dir, const fs::path& dataset) {
   }
   if (dataset_two_pass) {
     evaluation.passes.push_back(EvaluatePass("pass1", run_dir / "pass1", dataset / "pass1", std::nullopt));
-    std::optional<Eigen::Isometry3d> alignment;
-    if (evaluation.passes[0].ate_m.has_value()) alignment = evaluation.passes[0].T_gt_est;
-    evaluation.passes.push_back(EvaluatePass("pass2", run_dir / "pass2", dataset / "pass2", alignment));
+    if (evaluation.passes[0].ate_m.has_value()) {
+      evaluation.passes.push_back(
+          EvaluatePass("pass2", run_dir / "pass2", dataset / "pass2", evaluation.passes[0].T_gt_est));
+    } else {
+      // No map frame to score pass 2 in; aligning it on its own would flatter it.
+      PassEvaluation pass2 = EvaluatePass("pass2", run_dir / "pass2", dataset / "pass2", Eigen::Isometry3d::Identity());
+      pass2.ate_m.reset();
+      pass2.ate_aligned = false;
+      pass2.ate_missing_reason = "pass 1 has no ATE, so no map frame to score pass 2 in";
+      evaluation.passes.push_back(std::move(pass2));
+    }
   } else {
     evaluation.passes.push_back(EvaluatePass(dataset.filename().string(), run_dir, dataset, std::nullopt));
   }

@@ -351,20 +351,22 @@ ScenarioReport RunScenarioToReport(const ScenarioRunRequest& args) {
   for (const std::string& name : skipped) fmt::print("expectation {} not checked: --modes leaves its mode out\n", name);
 
   std::fflush(stdout);
-  ScenarioReport report;
-  report.dataset_from_cache = EnsureDataset(scenario, dataset, args, backend, cancel);
-
-  // An earlier report in the same place goes first, so a run that stops half-way leaves
-  // no results.json that looks complete.
+  // An earlier report in the same place goes first (before a generation that may fail or
+  // be interrupted), so a run that stops half-way leaves no results.json or JUnit file
+  // that looks complete.
   for (const char* stale : {"results.json", "report.md", "report.html", "scenario.yaml"}) fs::remove(report_dir / stale);
   if (!args.junit_file.empty()) fs::remove(args.junit_file);
   fs::remove_all(report_dir / "runs");
   fs::remove_all(report_dir / "figures");
+  ScenarioReport report;
+  report.dataset_from_cache = EnsureDataset(scenario, dataset, args, backend, cancel);
   fs::create_directories(report_dir / "runs");
   std::vector<RepeatRun> runs = PlanRuns(bench);
   std::fflush(stdout);
   RepeatRunner(&runs, bench, dataset, report_dir, args, cancel).RunAll();
   report.runs = std::move(runs);
+  // A Ctrl-C after the last frame stops here, not after minutes of figures with exit 0.
+  if (cancel->load()) throw Error("scenario run: interrupted; no report written to " + report_dir.string());
 
   report.scenario_name = scenario.name;
   report.scenario_file = args.scenario_file;

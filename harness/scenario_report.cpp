@@ -649,9 +649,11 @@ std::vector<ExpectationResult> CheckExpectations(const std::vector<Expectation>&
   std::vector<ExpectationResult> results;
   for (const Expectation& expectation : expectations) {
     const MetricName& name = expectation.name;
+    // A run without the value (no ATE after a pass that lost its map, say) fails the
+    // check: the median of the others would hide it.
     auto median = [&](const std::string& mode) {
       const Spread* s = FindSpread(table, name.pass, mode, name.metric);
-      return s == nullptr ? kNaN : s->median;
+      return s == nullptr || s->count < s->runs ? kNaN : s->median;
     };
     ExpectationResult result;
     result.expectation = expectation;

@@ -86,7 +86,10 @@ Suite LoadSuite(const fs::path& file) {
     const bool plain_name = !entry.name.empty() && std::all_of(entry.name.begin(), entry.name.end(), [](char c) {
       return std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '_' || c == '-';
     });
-    if (!plain_name) throw Error(where + ": name '" + entry.name + "' must be letters, digits, '.', '_' or '-'");
+    // It names the entry's report folder: "." or ".." would be the suite's own or its parent.
+    if (!plain_name || entry.name == "." || entry.name == "..") {
+      throw Error(where + ": name '" + entry.name + "' must be letters, digits, '.', '_' or '-', and not . or ..");
+    }
     if (!names.insert(entry.name).second) throw Error(where + ": name '" + entry.name + "' is used twice");
     entry.scenario = file.parent_path() / node["scenario"].as<std::string>();
     if (!fs::exists(entry.scenario)) throw Error(where + ": scenario " + entry.scenario.string() + ": no such file");
