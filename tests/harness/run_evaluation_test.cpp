@@ -108,6 +108,24 @@ TEST_F(RunEvaluationTest, PassTwoIsScoredWithPassOnesAlignment) {
   EXPECT_TRUE(std::isnan(metrics.at("seg_refined_map")));
 }
 
+// Pass 1 lost its map (two poses: no ATE, no alignment): pass 2 has no map frame to be
+// scored in, and is not aligned on its own instead.
+TEST_F(RunEvaluationTest, PassTwoHasNoAteWithoutPassOnesAlignment) {
+  WriteSequence(dir_ / "data" / "pass1", GroundTruth(0));
+  WriteSequence(dir_ / "data" / "pass2", GroundTruth(0.5));
+  std::vector<StampedPose> two_poses = GroundTruth(0);
+  two_poses.resize(2);
+  WriteRun(dir_ / "run" / "pass1", two_poses, "");
+  WriteRun(dir_ / "run" / "pass2", GroundTruth(0.5), "");
+  const RunEvaluation evaluation = EvaluateRun(dir_ / "run", dir_ / "data");
+  ASSERT_EQ(evaluation.passes.size(), 2u);
+  EXPECT_FALSE(evaluation.passes[0].ate_m.has_value());
+  EXPECT_FALSE(evaluation.passes[1].ate_m.has_value());
+  EXPECT_NE(evaluation.passes[1].ate_missing_reason.find("no map frame"), std::string::npos)
+      << evaluation.passes[1].ate_missing_reason;
+  EXPECT_TRUE(std::isnan(PassMetrics(evaluation.passes[1]).at("ate_rmse_m")));
+}
+
 // A real sequence's folder name is longer than "pass1"; the columns still line up.
 TEST(RunEvaluationTableTest, ColumnsLineUpUnderALongSequenceName) {
   RunEvaluation evaluation;

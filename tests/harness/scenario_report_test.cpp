@@ -91,6 +91,25 @@ TEST(ScenarioReportTest, ChecksUseMediansAndRatiosOfMedians) {
   EXPECT_FALSE(results[2].passed);  // no pass-2 value: NaN fails
 }
 
+// Two of three repeats without an ATE (a pass that lost its map): the one value that is
+// there must not pass the check for all three.
+TEST(ScenarioReportTest, ACheckFailsWhenARepeatLacksTheValue) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  SpreadTable table;
+  table["pass1"]["mutual"]["ate_rmse_m"] = SpreadOf({nan, nan, 0.01});
+  table["pass1"]["plain"]["ate_rmse_m"] = SpreadOf({0.1});
+  const std::vector<ExpectationResult> results = CheckExpectations(
+      ParseExpectations(YAML::Load("{mutual.ate_rmse_m: {max: 0.05}, mutual_vs_plain.ate_ratio: {max: 0.5},"
+                                   " plain.ate_rmse_m: {max: 1}}"),
+                        kModes, "s.yaml"),
+      table);
+  ASSERT_EQ(results.size(), 3u);
+  EXPECT_FALSE(results[0].passed);
+  EXPECT_TRUE(std::isnan(results[0].value));
+  EXPECT_FALSE(results[1].passed);
+  EXPECT_TRUE(results[2].passed);
+}
+
 TEST(ScenarioReportTest, BenchSectionIsChecked) {
   const BenchSettings bench =
       BenchSettings::FromYaml(YAML::Load("{modes: [plain, mutual], repeats: 3, segmenter: gt, seed: 9}"), "s.yaml");
