@@ -286,6 +286,7 @@ bool EnsureDataset(const scenes::Scenario& scenario, const fs::path& dataset, co
     generate_options.max_frames_per_pass = args.frames;
     generate_options.cancel = cancel;
     generate_options.overwrite = true;  // a folder there that is not a dataset is replaced
+    generate_options.keep_complete_dataset = true;  // one another shard finished meanwhile is not
     fs::create_directories(dataset.parent_path());
     ProgressBar bar(args.progress_prefix + "generate " + scenario.name);
     const sim::GenerateSummary summary =
@@ -293,7 +294,8 @@ bool EnsureDataset(const scenes::Scenario& scenario, const fs::path& dataset, co
           if (!args.quiet) bar.Update(p.frames_done, p.frames_total, p.frames_per_second, fmt::format("pass{}", p.pass_index + 1));
         });
     if (!args.quiet) bar.Finish();
-    fmt::print("dataset {}: generated {} frames in {:.1f} s\n", dataset.string(), summary.frames, summary.seconds);
+    fmt::print("dataset {}: generated {} frames in {:.1f} s{}\n", dataset.string(), summary.frames, summary.seconds,
+               summary.kept_existing ? " (another process finished it first: that one is kept)" : "");
   }
   // Written on every use: its key names this build, so a dataset from before records
   // were kept gets one too.

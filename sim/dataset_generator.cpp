@@ -234,6 +234,7 @@ class DatasetGeneration {
         options_(options),
         progress_(progress),
         world_(scenes::BuildWorld(scenario)),
+        target_(out_dir),
         staging_(options.write_files ? std::optional<StagingDirectory>(std::in_place, out_dir, options.overwrite)
                                      : std::nullopt),
         renderer_(world_, options.backend, options.render),
@@ -253,7 +254,11 @@ class DatasetGeneration {
                                        {"seed", scenario_.seed},
                                        {"kind", world_.kind},
                                        {"generator", "segslam generate"}});
-      staging_->Commit();
+      if (options_.keep_complete_dataset && fs::exists(target_ / "manifest.json")) {
+        summary_.kept_existing = true;  // the staging folder goes with staging_
+      } else {
+        staging_->Commit();
+      }
     }
     summary_.seconds = SecondsSince(start_);
     return summary_;
@@ -336,6 +341,7 @@ class DatasetGeneration {
   const ProgressCallback& progress_;
   const Clock::time_point start_ = Clock::now();
   const scenes::World world_;
+  fs::path target_;
   std::optional<StagingDirectory> staging_;
   WorldRenderer renderer_;
   const SensorModel sensor_;

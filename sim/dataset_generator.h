@@ -28,6 +28,10 @@ struct GenerateOptions {
   int max_frames_per_pass = 0;             // 0 = all frames the scenario defines
   int encode_threads = 0;                  // threads for noise + PNG encoding; 0 = cores
   bool overwrite = false;                  // replace an existing output directory
+  // With overwrite: keep a complete dataset (one with manifest.json) that appeared there
+  // while this one was generated, and drop this one. Two processes filling one cache
+  // entry make the same bytes; replacing would pull the first's dataset from under it.
+  bool keep_complete_dataset = false;
   bool write_files = true;                 // false: render + noise + encode, write nothing
                                            // (benchmarks of the pipeline without disk)
   const std::atomic<bool>* cancel = nullptr;  // set to true to stop (Ctrl-C); checked per frame
@@ -48,6 +52,7 @@ struct GenerateSummary {
   double seconds = 0.0;        // wall time of the whole generation
   double render_seconds = 0.0;  // of which spent in the renderer (scene update + GL)
   std::string gl_renderer;     // e.g. "llvmpipe (LLVM 15.0.6, 256 bits)"
+  bool kept_existing = false;  // keep_complete_dataset found one there and kept it
   double FramesPerSecond() const { return seconds > 0 ? frames / seconds : 0.0; }
 };
 

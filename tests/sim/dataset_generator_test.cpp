@@ -428,6 +428,33 @@ TEST(Determinism, SameScenarioGivesIdenticalBytes) {
   fs::remove_all(root);
 }
 
+// overwrite replaces what is there; keep_complete_dataset keeps a complete dataset that
+// appeared meanwhile (another shard filling the same cache entry) and drops its own.
+TEST(Overwrite, KeepsACompleteDatasetOnlyWhenAsked) {
+  const scenes::Scenario scenario =
+      scenes::LoadScenario(fs::path(SEGSLAM_SOURCE_DIR) / "scenarios/test/office_small.yaml");
+  const fs::path root = fs::temp_directory_path() / ("segslam_overwrite_" + std::to_string(::getpid()));
+  fs::remove_all(root);
+  sim::GenerateOptions options;
+  options.max_frames_per_pass = 2;
+  sim::GenerateDataset(scenario, root / "d", options);
+  std::ofstream(root / "d" / "marker") << "first";
+
+  options.overwrite = true;
+  options.keep_complete_dataset = true;
+  EXPECT_TRUE(sim::GenerateDataset(scenario, root / "d", options).kept_existing);
+  EXPECT_TRUE(fs::exists(root / "d" / "marker"));
+  int entries = 0;
+  for ([[maybe_unused]] const auto& entry : fs::directory_iterator(root)) ++entries;
+  EXPECT_EQ(entries, 1);  // no staging folder left
+
+  options.keep_complete_dataset = false;
+  EXPECT_FALSE(sim::GenerateDataset(scenario, root / "d", options).kept_existing);
+  EXPECT_FALSE(fs::exists(root / "d" / "marker"));
+  EXPECT_TRUE(VerifyManifest(root / "d").empty());
+  fs::remove_all(root);
+}
+
 // camera.distortion: every stored image is the ideal render bent through the lens, and
 // camera.yaml names the lens, so a run undistorts the frames again (core/lens_distortion.h).
 TEST(LensDistortion, StoredImagesAreTheRendersBentThroughTheLens) {
