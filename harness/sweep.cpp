@@ -518,8 +518,13 @@ std::string MergeSweep(const std::vector<fs::path>& inputs, const fs::path& out_
   const SweepGrid grid = SweepGrid::FromJson(sweep.value("grid", nlohmann::json::object()), grid_file.string());
   for (std::size_t i = 1; i < inputs.size(); ++i) {
     const fs::path other = inputs[i] / "sweep.json";
-    if (ReadJsonFile(other).value("grid", nlohmann::json::object()) != sweep["grid"]) {
+    const nlohmann::json other_sweep = ReadJsonFile(other);
+    if (other_sweep.value("grid", nlohmann::json::object()) != sweep["grid"]) {
       throw Error("sweep merge: " + other.string() + " holds another grid than " + grid_file.string());
+    }
+    if (other_sweep.value("settings", nlohmann::json()) != sweep.value("settings", nlohmann::json())) {
+      throw Error("sweep merge: " + other.string() + " was run with other settings than " + grid_file.string() +
+                  " (scenario, --frames, --modes, --repeats, --segmenter or --set)");
     }
   }
   const std::vector<nlohmann::json> results = GatherPointResults(grid, inputs, out_dir);

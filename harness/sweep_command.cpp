@@ -83,9 +83,9 @@ void CheckEveryPoint(const scenes::Scenario& base, const SweepGrid& grid, const 
   }
 }
 
-// Writes out_dir/sweep.json, which names the sweep's scenario and grid. A folder that
-// holds another sweep (another grid, or an unreadable sweep.json) is refused, so shards
-// and reruns of one sweep share a folder and different sweeps never mix.
+// Writes out_dir/sweep.json, which names the sweep's scenario, grid and settings. A folder
+// that holds another sweep (another grid or settings, or an unreadable sweep.json) is
+// refused, so shards and reruns of one sweep share a folder and different sweeps never mix.
 void ClaimSweepFolder(const fs::path& out_dir, const nlohmann::json& sweep) {
   fs::create_directories(out_dir);
   const fs::path sweep_file = out_dir / "sweep.json";
@@ -96,8 +96,11 @@ void ClaimSweepFolder(const fs::path& out_dir, const nlohmann::json& sweep) {
     } catch (const Error&) {
       // unreadable: refused below like another sweep's
     }
-    if (existing.value("grid", nlohmann::json()) != sweep["grid"]) {
-      throw Error("sweep: " + out_dir.string() + " holds another sweep (sweep.json differs); choose another --out");
+    if (existing.value("grid", nlohmann::json()) != sweep["grid"] ||
+        existing.value("settings", nlohmann::json()) != sweep["settings"]) {
+      throw Error("sweep: " + out_dir.string() +
+                  " holds another sweep (sweep.json differs: grid, scenario, --frames, --modes, --repeats, "
+                  "--segmenter or --set); choose another --out");
     }
   }
   WriteFileAtomically(sweep_file, sweep.dump(2) + "\n");
@@ -141,7 +144,12 @@ int RunSweep(const SweepArgs& args) {
 
   const std::string default_name = sweep_file_spec ? sweep_file_spec->name : base.name + "-sweep";
   const fs::path out_dir = args.out_dir.empty() ? fs::path("reports") / default_name : fs::path(args.out_dir);
-  nlohmann::json sweep = {{"scenario_file", run.scenario_file}, {"grid", grid.ToJson()}};
+  // What every point's results depend on besides the grid: a folder (or a shard to merge)
+  // made with other settings holds another sweep.
+  const nlohmann::json settings = {{"scenario_file", run.scenario_file}, {"frames", run.frames},
+                                   {"modes", run.modes},                 {"repeats", run.repeats},
+                                   {"segmenter", run.segmenter},         {"overrides", run.overrides}};
+  nlohmann::json sweep = {{"scenario_file", run.scenario_file}, {"grid", grid.ToJson()}, {"settings", settings}};
   if (sweep_file_spec) {
     sweep["sweep_file"] = args.file;
     sweep["name"] = sweep_file_spec->name;

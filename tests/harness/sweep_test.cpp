@@ -275,6 +275,22 @@ TEST_F(SweepCliTest, ShardsMergedEqualOneRun) {
   const CommandOutput again = Run("sweep " + common + " --out " + (dir_ / "whole").string());
   ASSERT_EQ(again.exit_code, 0) << again.stderr_text;
   EXPECT_NE(again.stdout_text.find("done before, kept"), std::string::npos) << again.stdout_text;
+
+  // The same grid with other settings is another sweep: its points are not the ones kept
+  // there, and shards of the two do not merge.
+  const std::string longer = kSmallOffice + " --set office.people_walking=0,2 --set office.people_sitting=1 --frames 14 " +
+                             "--repeats 1 --modes plain,mutual --segmenter gt -q --cache " + (dir_ / "cache").string();
+  const CommandOutput other = Run("sweep " + longer + " --out " + (dir_ / "whole").string());
+  EXPECT_EQ(other.exit_code, 1);
+  EXPECT_NE(other.stderr_text.find("holds another sweep"), std::string::npos) << other.stderr_text;
+  fs::create_directories(dir_ / "other_settings");
+  nlohmann::json claimed = nlohmann::json::parse(ReadText(dir_ / "shard2" / "sweep.json"));
+  claimed["settings"]["frames"] = 14;
+  std::ofstream(dir_ / "other_settings" / "sweep.json") << claimed.dump();
+  const CommandOutput mixed = Run("sweep merge " + (dir_ / "shard1").string() + " " +
+                                  (dir_ / "other_settings").string() + " --out " + (dir_ / "mixed").string());
+  EXPECT_EQ(mixed.exit_code, 1);
+  EXPECT_NE(mixed.stderr_text.find("was run with other settings"), std::string::npos) << mixed.stderr_text;
 }
 
 // A sweep file over the simulated segmenter's error strength: strength 0 is the ground
