@@ -66,13 +66,15 @@ std::uint64_t Fnv1a64(const std::string& bytes) {
 
 // The dataset depends on the world description (not on `expect:` or `bench:`), the frame
 // limit and the generator's code.
-std::string DatasetCacheKey(const scenes::Scenario& scenario, int frames) {
+std::string DatasetCacheKey(const scenes::Scenario& scenario, int frames, sim::GlBackend backend) {
   scenes::Scenario world = scenario;
   world.expect = YAML::Node();
   world.bench = YAML::Node();
   YAML::Emitter yaml;
   yaml << scenes::ScenarioToYaml(world);
-  const std::string key_text = fmt::format("{}\nframes={}\ncode={}\n", yaml.c_str(), frames, SEGSLAM_VERSION);
+  std::string key_text = fmt::format("{}\nframes={}\ncode={}\n", yaml.c_str(), frames, SEGSLAM_VERSION);
+  // A GPU's EGL may rasterise other pixels than llvmpipe; OSMesa's key stays as it was.
+  if (backend != sim::GlBackend::kOsmesa) key_text += "gl=" + sim::GlBackendName(backend) + "\n";
   return fmt::format("{:016x}", Fnv1a64(key_text)).substr(0, 12);
 }
 
@@ -347,7 +349,7 @@ ScenarioReport RunScenarioToReport(const ScenarioRunRequest& args) {
   const std::atomic<bool>* cancel = InstallInterruptFlag();
 
   const fs::path report_dir = args.out_dir.empty() ? fs::path("reports") / scenario.name : fs::path(args.out_dir);
-  const fs::path dataset = fs::path(args.cache_dir) / (scenario.name + "-" + DatasetCacheKey(scenario, args.frames));
+  const fs::path dataset = fs::path(args.cache_dir) / (scenario.name + "-" + DatasetCacheKey(scenario, args.frames, backend));
   fmt::print("segslam scenario run: {} ({}), modes {}, {} repeat(s), segmenter {}\n", scenario.name,
              args.scenario_file, fmt::format("{}", fmt::join(bench.modes, ", ")), bench.repeats, bench.SegmenterLabel());
   for (const std::string& name : skipped) fmt::print("expectation {} not checked: --modes leaves its mode out\n", name);
