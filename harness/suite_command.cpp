@@ -201,14 +201,25 @@ SuiteTables MakeSuiteTables(const Suite& suite, const std::vector<nlohmann::json
   return tables;
 }
 
-// Every entry's scenario and overrides, checked before the first run.
-void CheckSuiteEntries(const Suite& suite, const std::string& suite_file) {
+// Every entry's scenario, overrides, bench settings and expectations, checked before the
+// first run: a bad one in the last entry would otherwise stop the suite hours in.
+void CheckSuiteEntries(const Suite& suite, const SuiteArgs& args) {
   for (const SuiteEntry& entry : suite.entries) {
     scenes::Scenario scenario = scenes::LoadScenario(entry.scenario);
     try {
       scenes::ApplyOverrides(scenario, entry.overrides);
     } catch (const Error& e) {
-      throw Error(suite_file + ": entry " + entry.name + ": set: " + e.what());
+      throw Error(args.suite_file + ": entry " + entry.name + ": set: " + e.what());
+    }
+    try {
+      ScenarioRunRequest request = args.run;
+      request.scenario_file = entry.scenario.string();
+      request.overrides = entry.overrides;
+      EffectiveBench(scenario, request);
+      ParseExpectations(scenario.expect, BenchSettings::FromYaml(scenario.bench, request.scenario_file).modes,
+                        request.scenario_file);
+    } catch (const Error& e) {
+      throw Error(args.suite_file + ": entry " + entry.name + ": " + e.what());
     }
   }
 }
@@ -236,7 +247,7 @@ ScenarioReport RunSuiteEntry(const Suite& suite, std::size_t i, const SuiteArgs&
 int RunSuite(const SuiteArgs& args) {
   const auto start = std::chrono::steady_clock::now();
   const Suite suite = LoadSuite(args.suite_file);
-  CheckSuiteEntries(suite, args.suite_file);
+  CheckSuiteEntries(suite, args);
   const fs::path out_dir = args.out_dir.empty() ? fs::path("reports") / suite.name : fs::path(args.out_dir);
   fmt::print("segslam scenario suite: {} ({} entries) into {}\n", suite.name, suite.entries.size(), out_dir.string());
   std::vector<nlohmann::json> results;

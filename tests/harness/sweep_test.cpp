@@ -386,6 +386,23 @@ TEST_F(SweepCliTest, SuiteJoinsItsEntriesIntoThePapersTables) {
   EXPECT_NE(refused.stderr_text.find("entries[0]: tables: unknown table 'table9'"), std::string::npos)
       << refused.stderr_text;
   EXPECT_FALSE(fs::exists(dir_ / "cache2"));
+
+  // A bad bench setting in the last entry stops the suite before the first one runs; an
+  // entry named .. (its report folder) is refused.
+  const fs::path late = dir_ / "late_suite.yaml";
+  std::ofstream(late) << "name: late\nentries:\n"
+                      << "  - {name: a, scenario: " << kSmallOffice << ", tables: [ate]}\n"
+                      << "  - {name: b, scenario: " << kSmallOffice << ", set: [bench.segmenter=magic], tables: [ate]}\n";
+  const CommandOutput late_refused = Run("scenario suite " + late.string() + " -q --cache " + (dir_ / "cache3").string() +
+                                         " --out " + (dir_ / "late_out").string());
+  EXPECT_EQ(late_refused.exit_code, 1);
+  EXPECT_NE(late_refused.stderr_text.find("entry b: "), std::string::npos) << late_refused.stderr_text;
+  EXPECT_FALSE(fs::exists(dir_ / "cache3"));
+  const fs::path dots = dir_ / "dots_suite.yaml";
+  std::ofstream(dots) << "name: dots\nentries:\n  - {name: '..', scenario: " << kSmallOffice << ", tables: [ate]}\n";
+  const CommandOutput dots_refused = Run("scenario suite " + dots.string() + " -q --cache " + (dir_ / "cache4").string());
+  EXPECT_EQ(dots_refused.exit_code, 1);
+  EXPECT_NE(dots_refused.stderr_text.find("not . or .."), std::string::npos) << dots_refused.stderr_text;
 }
 
 }  // namespace
