@@ -300,8 +300,8 @@ Shard Shard::Parse(const std::string& text) {
 
 namespace {
 
-// Every point's results.json, from the first input that has it, copied into out_dir's
-// points/ unless it is already there. Throws naming the points no input has.
+// Every point's results.json (and its report and figures), from the first input that has
+// it, copied into out_dir's points/ unless it is already there. Throws naming the points no input has.
 std::vector<nlohmann::json> GatherPointResults(const SweepGrid& grid, const std::vector<fs::path>& inputs,
                                                const fs::path& out_dir) {
   const int points = grid.PointCount();
@@ -317,6 +317,14 @@ std::vector<nlohmann::json> GatherPointResults(const SweepGrid& grid, const std:
       const fs::path target = out_dir / "points" / name / "results.json";
       if (!fs::exists(target) || !fs::equivalent(file, target)) {
         fs::create_directories(target.parent_path());
+        // The point's report comes along, so the merged report's pointer to it holds
+        // (not its runs/, which can be large).
+        for (const char* part : {"report.md", "report.html", "figures"}) {
+          if (fs::exists(file.parent_path() / part)) {
+            fs::copy(file.parent_path() / part, target.parent_path() / part,
+                     fs::copy_options::recursive | fs::copy_options::overwrite_existing);
+          }
+        }
         WriteFileAtomically(target, results[p].dump(2) + "\n");
       }
       found = true;

@@ -262,6 +262,8 @@ TEST_F(SweepCliTest, ShardsMergedEqualOneRun) {
   const CommandOutput merged = Run("sweep merge " + (dir_ / "shard1").string() + " " + (dir_ / "shard2").string() +
                                    " --out " + (dir_ / "merged").string());
   ASSERT_EQ(merged.exit_code, 0) << merged.stderr_text;
+  // The merged report points at each point's own report: it is there.
+  EXPECT_TRUE(fs::exists(dir_ / "merged" / "points" / "office.people_walking=2" / "report.html"));
   const nlohmann::json a = nlohmann::json::parse(ReadText(dir_ / "whole" / "sweep_results.json"));
   const nlohmann::json b = nlohmann::json::parse(ReadText(dir_ / "merged" / "sweep_results.json"));
   ASSERT_EQ(a["points"].size(), 2u);
