@@ -237,9 +237,7 @@ SequenceCamera ResolveSequenceCamera(const std::filesystem::path& dir,
   return *known;
 }
 
-
 }  // namespace
-
 
 std::vector<TumFrameEntry> ReadTumAssociations(const std::filesystem::path& associations) {
   std::vector<TumFrameEntry> entries;
@@ -264,7 +262,7 @@ namespace {
 
 // Frames: associations.txt if present (then rgb.txt/depth.txt are not needed), else
 // associate rgb.txt with depth.txt as TUM's associate.py does. Every listed image must exist.
-std::vector<TumFrameEntry> ReadTumFrames(const std::filesystem::path& dir) {
+std::vector<TumFrameEntry> ReadFrameEntries(const std::filesystem::path& dir) {
   const std::filesystem::path associations = dir / "associations.txt";
   std::vector<TumFrameEntry> entries;
   if (std::filesystem::exists(associations)) {
@@ -310,7 +308,7 @@ TumSequence TumSequence::Open(const std::filesystem::path& dir,
   TumSequence sequence;
   sequence.dir_ = dir;
   sequence.camera_ = ResolveSequenceCamera(dir, camera);
-  sequence.entries_ = ReadTumFrames(dir);
+  sequence.entries_ = ReadFrameEntries(dir);
   const std::filesystem::path groundtruth = dir / "groundtruth.txt";
   if (std::filesystem::exists(groundtruth)) {
     sequence.groundtruth_ = ReadTumTrajectory(groundtruth);
