@@ -181,12 +181,13 @@ int RunMasksExport(const MasksExportArgs& args) {
   const TumSequence sequence = TumSequence::OpenWithCameraFile(args.sequence_dir, args.camera_file);
   const cv::Size size(sequence.camera().intrinsics.width, sequence.camera().intrinsics.height);
   std::unique_ptr<seg::SimulatedSegmenter> simulated;
+  std::unique_ptr<seg::ExternalMaskSegmenter> folder;  // checks that every frame's two files are there
   if (!args.segmenter.empty()) {
     seg::SimulatedSegmenterOptions options = seg::SimulatedSegmenterOptions::Preset(args.segmenter);
     options.strength = args.strength;
     simulated = std::make_unique<seg::SimulatedSegmenter>(sequence.dir(), options, args.seed, args.segmenter);
   } else {
-    seg::ExternalMaskSegmenter check(args.masks_dir, sequence);  // every frame's two files are there
+    folder = std::make_unique<seg::ExternalMaskSegmenter>(args.masks_dir, sequence);
   }
 
   nlohmann::json results = nlohmann::json::array();
@@ -204,8 +205,7 @@ int RunMasksExport(const MasksExportArgs& args) {
       for (seg::InstanceMask& instance : masks.instances) instance.mask = sequence.InstanceMaskAsStored(instance.mask);
     } else {
       // Read as stored, without the undistortion a run applies.
-      const fs::path stem = fs::path(args.masks_dir) / fs::path(sequence.entries()[i].rgb_file).stem();
-      const fs::path png = stem.string() + ".png", table = stem.string() + ".json";
+      const fs::path png = folder->MaskPath(i), table = folder->TablePath(i);
       masks = seg::ExternalMasksToSegmentation(ReadInstanceMask(png),
                                                seg::ParseExternalMaskTable(ReadJsonFile(table), table.string()),
                                                size, static_cast<int>(i), png.string());

@@ -230,9 +230,16 @@ void ScoreMovingDetection(const std::vector<LoggedFrame>& frames, const fs::path
 }
 
 // ATE: Horn-aligned, or in pass 1's aligned frame (see the header).
+// `fixed_alignment`: score in that frame (pass 2 in pass 1's map frame); without one,
+// align (Horn), unless `in_map_frame` says there is no map frame to score in.
 void ScoreAte(const std::vector<StampedPose>& ground_truth, const std::vector<StampedPose>& estimate,
-              const std::optional<Eigen::Isometry3d>& fixed_alignment, PassEvaluation* pass) {
-  pass->ate_aligned = !fixed_alignment.has_value();
+              const std::optional<Eigen::Isometry3d>& fixed_alignment, bool in_map_frame, PassEvaluation* pass) {
+  pass->ate_aligned = !fixed_alignment.has_value() && !in_map_frame;
+  if (in_map_frame && !fixed_alignment.has_value()) {
+    // Aligning pass 2 on its own would flatter it.
+    pass->ate_missing_reason = "pass 1 has no ATE, so no map frame to score pass 2 in";
+    return;
+  }
   const std::size_t needed = pass->ate_aligned ? 3 : 1;
   if (estimate.size() < needed) {
     pass->ate_missing_reason = fmt::format("{} pose(s) estimated, ATE needs {}", estimate.size(), needed);
@@ -284,7 +291,7 @@ void ReadLoopSegmentationScores(const fs::path& seg_file, PassEvaluation* pass) 
 }
 
 PassEvaluation EvaluatePass(const std::string& name, const fs::path& run_dir, const fs::path& sequence_dir,
-                            const std::optional<Eigen::Isometry3d>& fixed_alignment) {
+                            const std::optional<Eigen::Isometry3d>& fixed_alignment, bool in_map_frame = false) {
   PassEvaluation pass;
   pass.name = name;
   pass.run_dir = run_dir;
@@ -312,7 +319,7 @@ PassEvaluation EvaluatePass(const std::string& name, const fs::path& run_dir, co
   const std::vector<StampedPose> ground_truth = ReadTumTrajectory(ground_truth_file);
   const std::vector<StampedPose> estimate = ReadTumTrajectory(trajectory_file);
 
-  ScoreAte(ground_truth, estimate, fixed_alignment, &pass);
+  ScoreAte(ground_truth, estimate, fixed_alignment, in_map_frame, &pass);
   ScoreRpe(ground_truth, estimate, &pass);
   ReadLoopSegmentationScores(run_dir / "seg.json", &pass);
 
@@ -479,17 +486,10 @@ RunEvaluation EvaluateRun(const fs::path& run_dir, const fs::path& dataset) {
   }
   if (dataset_two_pass) {
     evaluation.passes.push_back(EvaluatePass("pass1", run_dir / "pass1", dataset / "pass1", std::nullopt));
-    if (evaluation.passes[0].ate_m.has_value()) {
-      evaluation.passes.push_back(
-          EvaluatePass("pass2", run_dir / "pass2", dataset / "pass2", evaluation.passes[0].T_gt_est));
-    } else {
-      // No map frame to score pass 2 in; aligning it on its own would flatter it.
-      PassEvaluation pass2 = EvaluatePass("pass2", run_dir / "pass2", dataset / "pass2", Eigen::Isometry3d::Identity());
-      pass2.ate_m.reset();
-      pass2.ate_aligned = false;
-      pass2.ate_missing_reason = "pass 1 has no ATE, so no map frame to score pass 2 in";
-      evaluation.passes.push_back(std::move(pass2));
-    }
+    std::optional<Eigen::Isometry3d> alignment;
+    if (evaluation.passes[0].ate_m.has_value()) alignment = evaluation.passes[0].T_gt_est;
+    evaluation.passes.push_back(
+        EvaluatePass("pass2", run_dir / "pass2", dataset / "pass2", alignment, /*in_map_frame=*/true));
   } else {
     evaluation.passes.push_back(EvaluatePass(dataset.filename().string(), run_dir, dataset, std::nullopt));
   }

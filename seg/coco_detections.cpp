@@ -135,10 +135,13 @@ CocoDetections CocoDetections::Read(const fs::path& file, const TumSequence& seq
     }
 
     std::string stem;
-    const auto listed = images.has_value() ? images->stem_of.find(IdText(image_id))
-                                           : std::unordered_map<std::string, std::string>::const_iterator();
-    if (images.has_value() && listed != images->stem_of.end()) {
-      stem = listed->second;
+    const std::string* listed_stem = nullptr;
+    if (images.has_value()) {
+      const auto listed = images->stem_of.find(IdText(image_id));
+      if (listed != images->stem_of.end()) listed_stem = &listed->second;
+    }
+    if (listed_stem != nullptr) {
+      stem = *listed_stem;
     } else if (image_id.is_string()) {
       stem = image_id.get<std::string>();
     } else if (images.has_value()) {
