@@ -23,7 +23,7 @@ struct TrackSample {
   int frame = 0;         // Frame index in the sequence.
   double stamp_s = 0;    // Frame timestamp, seconds.
   bool present = true;   // The object exists in the scene at this frame.
-  bool moving = false;   // The object (root or limbs) moves between this frame and the next.
+  bool moving = false;   // The object (root or limbs) moved since the previous frame.
   Eigen::Isometry3d T_world_object = Eigen::Isometry3d::Identity();  // Object-to-world.
   int visible_pixels = 0;  // Pixels of this instance in the frame's mask, >= 0.
 };

@@ -49,6 +49,11 @@ int RunGenerate(const GenerateArgs& args) {
   fmt::print("generated {} frames of '{}' into {} in {:.1f} s ({:.1f} frames/s, renderer {}, {})\n",
              summary.frames, scenario.name, args.out_dir, summary.seconds,
              summary.FramesPerSecond(), sim::GlBackendName(options.backend), summary.gl_renderer);
+  if (summary.movers_left_out > 0) {
+    fmt::print("note: {} of the scenario's moving cars and pedestrians were left out: no path tried kept them "
+               "clear of the others (manifest.json's movers_left_out)\n",
+               summary.movers_left_out);
+  }
   return 0;
 }
 

@@ -10,15 +10,34 @@
 
 #include <algorithm>
 #include <array>
+#include <cassert>
 #include <cmath>
 #include <functional>
+#include <optional>
 #include <set>
+#include <stdexcept>
+#include <string>
 
 namespace segslam::scenes {
 namespace {
 
 constexpr double kCurbHeightM = 0.15;
-constexpr double kSlotLengthM = 7.0;   // parking slot pitch along the curb
+// Parking slot pitch along the curb, as long as a real parallel stall: a car (4.9 m)
+// with room to pull out; a truck (7.2 m) stands only between cars or empty slots.
+constexpr double kSlotLengthM = 6.5;
+constexpr double kCurbGapM = 0.15;     // a parked vehicle's side to the curb
+constexpr double kParkedGapM = 0.3;    // least gap between parked vehicles, bumper to bumper
+
+// Footprints, half length along the heading and half width across it.
+struct VehicleDims {
+  double half_length, half_width;
+};
+constexpr VehicleDims kCarDims{2.45, 1.12}, kTruckDims{3.6, 1.2}, kBusDims{5.6, 1.3};  // cars with mirrors
+// Each side of a street, from the curb: a parking lane as wide as the widest parked
+// vehicle (trucks; buses do not park) with its curb gap, then the driving lane, whose
+// centre line the widest moving vehicle (a bus) keeps 0.2 m clear of the parking lane.
+constexpr double kParkingLaneM = kCurbGapM + 2 * kTruckDims.half_width;
+constexpr double kLaneToParkingM = kBusDims.half_width + 0.2;
 constexpr double kGroundFloorM = 4.2;  // shop floor height
 constexpr double kFloorM = 3.2;        // upper floor height
 constexpr double kBayM = 3.3;          // window bay width
@@ -61,8 +80,13 @@ class CityBuilder {
     block_ = spec_.block_size_m;
     road_ = spec_.road_width_m;
     walk_ = spec_.sidewalk_width_m;
-    lane_ = std::max(1.5, road_ / 2 - 3.2);
-    curb_car_ = road_ / 2 - 1.05;
+    lane_ = road_ / 2 - kParkingLaneM - kLaneToParkingM;
+    // Two buses passing each other keep 0.2 m apart (the oncoming lane is 0.1 m further
+    // out, MakeRouteLanes); Scenario's lower bound on the road width ensures it.
+    if (2 * lane_ + 0.1 < 2 * kBusDims.half_width + 0.2) {
+      throw std::invalid_argument("city.road_width_m " + std::to_string(road_) +
+                                  " m cannot hold two parking lanes and two driving lanes");
+    }
   }
 
   World Build() {
@@ -434,9 +458,9 @@ class CityBuilder {
     for (double s = clear; s + 3.0 <= block_ - clear + 1e-9; s += 9.0) {
       world_.static_geoms.push_back(MakeBox(At(pa + d * (s + 1.5), 0.006), Vec3(1.5, 0.075, 0.006), look_.paint, yaw));
     }
-    // Edge lines along both curbs.
+    // The parking lanes' lines along both curbs.
     for (double side : {-1.0, 1.0}) {
-      world_.static_geoms.push_back(MakeBox(At(pa + d * (block_ / 2) + r * side * (road_ / 2 - 0.35), 0.006),
+      world_.static_geoms.push_back(MakeBox(At(pa + d * (block_ / 2) + r * side * (road_ / 2 - kParkingLaneM), 0.006),
                                             Vec3(len / 2 + 2.5, 0.06, 0.006), look_.paint, yaw));
     }
     // Sidewalk furniture on both sides: trees, lamps, benches, hydrants, parking slots.
@@ -458,11 +482,18 @@ class CityBuilder {
       // Parking slots along the curb, heading with the traffic on that side.
       const Vec2 heading = side > 0 ? d : Vec2(-d);
       const bool on_route = OnRoute(a, b);
-      for (double t = clear + 1.0; t + kSlotLengthM <= block_ - clear + 2.0; t += kSlotLengthM) {
+      // The row keeps 0.25 m off the stop lines at both ends (their far edge is 0.2 m
+      // past `clear`), so no vehicle stands on a stop line or a crosswalk.
+      const int row = slots_.empty() ? 0 : slots_.back().row + 1;
+      const int row_slots = static_cast<int>(std::floor((len - 0.5) / kSlotLengthM + 1e-9));
+      const double row_start = clear + (len - row_slots * kSlotLengthM) / 2;
+      for (int k = 0; k < row_slots; ++k) {
         Slot slot;
-        slot.centre = pa + d * (t + kSlotLengthM / 2) + r * side * curb_car_;
+        slot.curb = pa + d * (row_start + (k + 0.5) * kSlotLengthM) + curb;
+        slot.to_road = -out;
         slot.yaw = YawOf(heading);
         slot.on_route = on_route;
+        slot.row = row;
         slots_.push_back(slot);
       }
       // A few fixed COCO objects near the route: benches and hydrants.
@@ -633,71 +664,156 @@ class CityBuilder {
   }
 
   struct Slot {
-    Vec2 centre;
+    Vec2 curb;     // on the curb's edge, at the middle of the slot
+    Vec2 to_road;  // unit, from the curb toward the street's centre line
     double yaw = 0;
     bool on_route = false;
+    int row = 0;  // the slots along one curb between two intersections share a row, in order
+  };
+
+  // A vehicle parked in a slot in one pass: its shift along the curb and half length.
+  struct ParkedVehicle {
+    double shift_m = 0, half_length = 0;
+  };
+
+  // Which slot holds which vehicle in each pass, so that no two parked vehicles touch:
+  // slots are 7 m apart, a truck is 7.2 m long, and pass 2 moves vehicles along the curb.
+  class ParkingLot {
+   public:
+    explicit ParkingLot(const std::vector<Slot>& slots) : slots_(slots), parked_(slots.size()), used_(slots.size()) {}
+
+    // Whether a vehicle of `half_length` shifted by `shift_m` fits slot i in `pass`: apart
+    // from its neighbours, and within its slot at the ends of a row.
+    bool Fits(std::size_t i, int pass, double half_length, double shift_m) const {
+      for (int dir : {-1, 1}) {
+        const std::optional<std::size_t> j = Neighbour(i, dir);
+        if (!j && dir * shift_m + half_length > kSlotLengthM / 2 + 1e-9) return false;
+        if (!j || !parked_[*j][pass]) continue;
+        const double gap = dir * (dir * kSlotLengthM + parked_[*j][pass]->shift_m - shift_m);
+        if (gap < half_length + parked_[*j][pass]->half_length + kParkedGapM) return false;
+      }
+      return true;
+    }
+
+    // How far a vehicle in slot i may move along the curb in direction dir (+1 ahead) in
+    // `pass`: up to the next vehicle; into an empty neighbouring slot only as far as still
+    // leaves room for a car there; at the end of a row, not beyond its own slot.
+    double Room(std::size_t i, int pass, double half_length, int dir) const {
+      const std::optional<std::size_t> j = Neighbour(i, dir);
+      if (!j) return kSlotLengthM / 2 - half_length;
+      const std::optional<ParkedVehicle>& other = parked_[*j][pass];
+      if (!other) return kSlotLengthM - half_length - kCarDims.half_length - kParkedGapM;
+      return kSlotLengthM + dir * other->shift_m - half_length - other->half_length - kParkedGapM;
+    }
+
+    // The first slot of `order` not taken before that fits the vehicle in the passes
+    // where it is present, or null when none does; marks it taken.
+    std::optional<std::size_t> Take(const std::vector<std::size_t>& order, const std::array<bool, 2>& passes,
+                                    double half_length) {
+      for (std::size_t i : order) {
+        if (used_[i]) continue;
+        if ((passes[0] && !Fits(i, 0, half_length, 0)) || (passes[1] && !Fits(i, 1, half_length, 0))) continue;
+        used_[i] = true;
+        for (int pass : {0, 1}) {
+          if (passes[pass]) parked_[i][pass] = ParkedVehicle{0, half_length};
+        }
+        return i;
+      }
+      return std::nullopt;
+    }
+
+    void Leave(std::size_t i, int pass) { parked_[i][pass].reset(); }
+    void Park(std::size_t i, int pass, const ParkedVehicle& v) { parked_[i][pass] = v; }
+
+   private:
+    std::optional<std::size_t> Neighbour(std::size_t i, int dir) const {
+      const std::size_t j = i + dir;
+      if (j >= slots_.size() || slots_[j].row != slots_[i].row) return std::nullopt;
+      return j;
+    }
+
+    const std::vector<Slot>& slots_;
+    std::vector<std::array<std::optional<ParkedVehicle>, 2>> parked_;
+    std::vector<bool> used_;  // taken in either pass: a slot left in pass 2 stays empty
   };
 
   // Parked cars at the curbs, most along the route; pass 2 relocates, removes, adds.
   void MakeParkedCars() {
     std::mt19937_64 rng = Rng("parked");
     // Slot order: route slots first, each group shuffled.
-    std::vector<int> route_slots, other_slots;
-    for (int i = 0; i < static_cast<int>(slots_.size()); ++i) (slots_[i].on_route ? route_slots : other_slots).push_back(i);
+    std::vector<std::size_t> route_slots, other_slots;
+    for (std::size_t i = 0; i < slots_.size(); ++i) (slots_[i].on_route ? route_slots : other_slots).push_back(i);
     Shuffle(route_slots, rng);
     Shuffle(other_slots, rng);
-    std::vector<int> order = route_slots;
+    std::vector<std::size_t> order = route_slots;
     order.insert(order.end(), other_slots.begin(), other_slots.end());
-    std::size_t next_slot = 0;
-    auto take_slot = [&]() -> const Slot* {
-      return next_slot < order.size() ? &slots_[order[next_slot++]] : nullptr;
-    };
-    auto pose_of = [&](const Slot& slot) {
-      return PoseXYZYaw(At(slot.centre, 0.0), slot.yaw + Uniform(rng, -0.03, 0.03));
+    ParkingLot lot(slots_);
+    auto pose_of = [&](const Slot& slot, const VehicleDims& dims, double shift_m) {
+      const Vec2 centre = slot.curb + slot.to_road * (kCurbGapM + dims.half_width) +
+                          shift_m * Vec2(std::cos(slot.yaw), std::sin(slot.yaw));
+      return PoseXYZYaw(At(centre, 0.0), slot.yaw + Uniform(rng, -0.03, 0.03));
     };
 
     // Pass 1 cars.
     std::vector<int> ids;
-    std::vector<const Slot*> own_slots;
+    std::vector<std::size_t> own_slots;
     for (int k = 0; k < spec_.parked_cars; ++k) {
-      const Slot* slot = take_slot();
-      if (slot == nullptr) break;
-      Object& o = b_.AddObject(VehicleKind(rng, false));
+      const std::string kind = VehicleKind(rng, false);
+      const VehicleDims dims = Dims(kind);
+      const std::optional<std::size_t> slot = lot.Take(order, {true, true}, dims.half_length);
+      if (!slot) break;
+      Object& o = b_.AddObject(kind);
       o.parts.push_back(MakeVehicle(rng, o.category_name));
-      o.placement[0].T_world_object = pose_of(*slot);
+      o.placement[0].T_world_object = pose_of(slots_[*slot], dims, 0);
       o.placement[1] = o.placement[0];
       ids.push_back(static_cast<int>(world_.objects.size()) - 1);
-      own_slots.push_back(slot);
+      own_slots.push_back(*slot);
     }
-    // Pass 2: relocate (to a free slot, or within the car's own), remove, add.
+    // Pass 2: relocate (within the car's own slot, along the curb, or to a free slot),
+    // remove, add.
     const ChangePlan plan = PlanSecondPass(static_cast<int>(ids.size()), s_.pass2, rng);
+    for (int k : plan.removed) {
+      world_.objects[ids[k]].placement[1].present = false;
+      lot.Leave(own_slots[k], 1);
+    }
     const double shift_m = s_.pass2.relocated_shift_m;
     for (int k : plan.relocated) {
       Object& car = world_.objects[ids[k]];
+      const VehicleDims dims = Dims(car.category_name);
+      const std::size_t i = own_slots[k];
+      lot.Leave(i, 1);
       if (shift_m > 0) {
-        double half_length, half_width;
-        VehicleSize(car.category_name, &half_length, &half_width);
-        constexpr double kClearanceM = 0.15;  // kept to the neighbouring slots' cars
-        const double room = std::max(0.0, kSlotLengthM / 2 - half_length - kClearanceM);
-        const double shift = std::min(room, Uniform(rng, 0.5, 1.0) * shift_m) * (Chance(rng, 0.5) ? 1.0 : -1.0);
-        const Slot& slot = *own_slots[k];
-        Slot moved = slot;
-        moved.centre += shift * Vec2(std::cos(slot.yaw), std::sin(slot.yaw));
-        car.placement[1].T_world_object = pose_of(moved);
+        // Moved by at least half the option, the preferred way if there is room for that.
+        const double want = Uniform(rng, 0.5, 1.0) * shift_m;
+        const int preferred = Chance(rng, 0.5) ? 1 : -1;
+        std::optional<double> shift;
+        for (int dir : {preferred, -preferred}) {
+          const double room = lot.Room(i, 1, dims.half_length, dir);
+          if (!shift && room >= 0.5 * shift_m) shift = dir * std::min(want, room);
+        }
+        if (shift) {
+          lot.Park(i, 1, {*shift, dims.half_length});
+          car.placement[1].T_world_object = pose_of(slots_[i], dims, *shift);
+          continue;
+        }
+        // No room along the curb (a truck between two vehicles): parked elsewhere.
+      }
+      const std::optional<std::size_t> slot = lot.Take(order, {false, true}, dims.half_length);
+      if (!slot) {
+        lot.Park(i, 1, {0, dims.half_length});
         continue;
       }
-      const Slot* slot = take_slot();
-      if (slot == nullptr) break;
-      car.placement[1].T_world_object = pose_of(*slot);
+      car.placement[1].T_world_object = pose_of(slots_[*slot], dims, 0);
     }
-    for (int k : plan.removed) world_.objects[ids[k]].placement[1].present = false;
     for (int k = 0; k < s_.pass2.added; ++k) {
-      const Slot* slot = take_slot();
-      if (slot == nullptr) break;
-      Object& o = b_.AddObject(VehicleKind(rng, false));
+      const std::string kind = VehicleKind(rng, false);
+      const VehicleDims dims = Dims(kind);
+      const std::optional<std::size_t> slot = lot.Take(order, {false, true}, dims.half_length);
+      if (!slot) break;
+      Object& o = b_.AddObject(kind);
       o.parts.push_back(MakeVehicle(rng, o.category_name));
       o.placement[0].present = false;
-      o.placement[1].T_world_object = pose_of(*slot);
+      o.placement[1].T_world_object = pose_of(slots_[*slot], dims, 0);
     }
     parked_candidates_ = static_cast<int>(ids.size());
   }
@@ -900,16 +1016,37 @@ class CityBuilder {
     return score;
   }
 
+  // Whether the track's body touches no placed actor's body at any sample (footprints
+  // without margins; a separating-axis ratio >= 1 for two rectangles means apart).
+  bool BodiesClear(const Track& tr) const {
+    const double radius = std::hypot(tr.half_length, tr.half_width);
+    for (std::size_t i = 0; i < samples_.size(); ++i) {
+      if (!tr.present[i]) continue;
+      for (const Track& other : tracks_) {
+        if (!other.present[i]) continue;
+        const double radii = radius + std::hypot(other.half_length, other.half_width);
+        if ((other.pos[i] - tr.pos[i]).squaredNorm() > radii * radii) continue;
+        if (SatRatio(tr, other, i, 0.0) < 1.0) return false;
+      }
+    }
+    return true;
+  }
+
   // Tries paths from `make(attempt)` on the object (moving, on the same path in each pass
-  // it is `present` in, absent from the other) and keeps the clearest; records its track.
+  // it is `present` in, absent from the other) and keeps the clearest of those whose body
+  // touches no other actor's, recording its track. When `attempts` find no such path, up
+  // to three times as many more are tried; when none does either, the object is taken out
+  // of the world again (it is the last one added) and false is returned: a crowd denser
+  // than the streets hold gets fewer actors, never actors that run through each other.
   template <typename MakePath>
-  void PlaceMover(int index, const std::array<bool, 2>& present, double half_length, double half_width, bool car,
+  bool PlaceMover(int index, const std::array<bool, 2>& present, double half_length, double half_width, bool car,
                   double min_camera_m, int attempts, MakePath make) {
     Object& o = world_.objects[index];
     double best = -1;
+    bool best_clear = false;
     std::array<Placement, 2> best_placement = o.placement;
     Track best_track;
-    for (int a = 0; a < attempts; ++a) {
+    for (int a = 0; a < 4 * attempts && !(a >= attempts && best_clear); ++a) {
       Placement p;
       p.present = true;
       p.moving = true;
@@ -918,21 +1055,35 @@ class CityBuilder {
       absent.present = false;
       o.placement = {present[0] ? p : absent, present[1] ? p : absent};
       Track tr = TrackOf(o, half_length, half_width, car);
-      const double score = Clearance(tr, min_camera_m, best);
-      if (score > best) {
+      // Once a clear path is kept, Clearance may stop as soon as it cannot beat it.
+      const double score = Clearance(tr, min_camera_m, best_clear ? best : -1.0);
+      if (best_clear && score <= best) continue;
+      const bool clear = score >= 1.0 || BodiesClear(tr);  // margins >= 1: bodies apart
+      if (clear != best_clear ? clear : score > best) {
         best = score;
+        best_clear = clear;
         best_placement = o.placement;
         best_track = std::move(tr);
       }
       if (best >= 1.0) break;
     }
+    if (!best_clear) {
+      assert(index + 1 == static_cast<int>(world_.objects.size()));
+      world_.objects.pop_back();
+      ++movers_left_out_;
+      return false;
+    }
     o.placement = best_placement;
     tracks_.push_back(std::move(best_track));
+    return true;
   }
 
+  static VehicleDims Dims(const std::string& kind) {
+    return kind == "bus" ? kBusDims : kind == "truck" ? kTruckDims : kCarDims;
+  }
   static void VehicleSize(const std::string& kind, double* half_length, double* half_width) {
-    *half_length = kind == "bus" ? 5.6 : kind == "truck" ? 3.6 : 2.45;
-    *half_width = kind == "bus" ? 1.3 : kind == "truck" ? 1.2 : 1.0;
+    *half_length = Dims(kind).half_length;
+    *half_width = Dims(kind).half_width;
   }
 
   // The vehicles the camera waits behind at red lights. Each comes along the camera's
@@ -1154,8 +1305,8 @@ class CityBuilder {
       } else {
         make = [&, rank = crossing++](int a) { return CrossingMotion(rng, crossings, rank, n_crossing, a); };
       }
-      PlaceMover(index, traffic.present, hl, hw, /*car=*/true, /*min_camera_m=*/3.15, 40, make);
-      if (queued) {
+      const bool placed = PlaceMover(index, traffic.present, hl, hw, /*car=*/true, /*min_camera_m=*/3.15, 40, make);
+      if (queued && placed) {
         const PathMotion& placed = world_.objects[index].placement[traffic.present[0] ? 0 : 1].path;
         ahead_speed = placed.speed_mps;
         ahead_gap = placed.start_offset_m - lanes.f0;
@@ -1353,6 +1504,7 @@ class CityBuilder {
 
  public:
   int parked_candidates_ = 0;
+  int movers_left_out_ = 0;
 
  private:
   const Scenario& s_;
@@ -1361,7 +1513,7 @@ class CityBuilder {
   WorldBuilder b_;
   CityLook look_;
   std::vector<int> facade_textures_, shop_textures_;
-  double block_, road_, walk_, lane_, curb_car_;
+  double block_, road_, walk_, lane_;
   std::vector<Node> nodes_;
   std::vector<int> dirs_;
   std::set<Edge> route_edges_;
@@ -1382,6 +1534,7 @@ World BuildCity(const Scenario& scenario) {
   CityBuilder builder(scenario);
   World world = builder.Build();
   RecordSecondPassChanges(&world, builder.parked_candidates_);
+  world.movers_left_out = builder.movers_left_out_;
   return world;
 }
 

@@ -21,6 +21,7 @@ using Vec3 = Eigen::Vector3d;
 
 constexpr double kDeskHeightM = 0.75;
 constexpr double kDeg = M_PI / 180.0;
+constexpr double kChairFootprintM = 0.31;  // the five-star base
 
 Vec3 At(const Vec2& p, double z) { return Vec3(p.x(), p.y(), z); }
 
@@ -264,7 +265,7 @@ class OfficeBuilder {
       g.push_back(MakeShape(Shape::kSphere, tip - Vec3(0, 0, 0.025), Vec3(0.025, 0, 0), black_));
     }
     for (double y : {-0.24, 0.24}) g.push_back(MakeBox(Vec3(0.02, y, 0.62), Vec3(0.15, 0.02, 0.02), black_));  // arm rests
-    if (changeable) changeable_.push_back(static_cast<int>(world_.objects.size()) - 1);
+    if (changeable) changeable_.push_back({static_cast<int>(world_.objects.size()) - 1, kChairFootprintM});
   }
 
   Object& MakePerson(std::mt19937_64& rng) {
@@ -399,7 +400,7 @@ class OfficeBuilder {
     if (pass2_only) {
       o.placement[0].present = false;
     } else {
-      changeable_.push_back(static_cast<int>(world_.objects.size()) - 1);
+      changeable_.push_back({static_cast<int>(world_.objects.size()) - 1, radius});
     }
     return true;
   }
@@ -412,10 +413,10 @@ class OfficeBuilder {
     for (const Item& item : fixed_items_) {
       if (budget <= 0) break;
       std::vector<Geom> geoms;
-      ItemGeoms(rng, item.category, geoms);
+      const double radius = ItemGeoms(rng, item.category, geoms);
       Object& o = Rigid(item.category, item.T);
       o.parts[0].geoms = std::move(geoms);
-      changeable_.push_back(static_cast<int>(world_.objects.size()) - 1);
+      changeable_.push_back({static_cast<int>(world_.objects.size()) - 1, radius});
       --budget;
     }
     // One spare chair pushed under the side desk.
@@ -432,7 +433,7 @@ class OfficeBuilder {
     candidates_ = static_cast<int>(changeable_.size());
     const ChangePlan plan = PlanSecondPass(candidates_, s_.pass2, rng);
     for (int k : plan.relocated) {
-      Object& o = world_.objects[changeable_[k]];
+      Object& o = world_.objects[changeable_[k].object];
       Eigen::Isometry3d T;
       if (o.category_name == "chair") {
         // Chairs are pushed elsewhere on the floor, clear of the walkers' loop.
@@ -442,13 +443,14 @@ class OfficeBuilder {
         const int floor = static_cast<int>(desk_surfaces_.size()) - 1;
         bool found = false;
         for (int tries = 0; tries < 8 && !found; ++tries) {
-          found = FreeSpot(rng, on_floor ? floor : UniformInt(rng, 0, floor - 1), 0.12, &T);
+          found = FreeSpot(rng, on_floor ? floor : UniformInt(rng, 0, floor - 1), changeable_[k].footprint_m, &T);
         }
-        if (!found) T = o.placement[0].T_world_object * PoseXYZYaw(Vec3(0.05, 0.05, 0), 0.5);
+        // No free spot: turned where it stands, which keeps it within its footprint.
+        if (!found) T = o.placement[0].T_world_object * PoseXYZYaw(Vec3::Zero(), Uniform(rng, 1.0, 2.0));
       }
       o.placement[1].T_world_object = T;
     }
-    for (int k : plan.removed) world_.objects[changeable_[k]].placement[1].present = false;
+    for (int k : plan.removed) world_.objects[changeable_[k].object].placement[1].present = false;
     for (int k = 0, added = 0; added < s_.pass2.added && k < 20 * (s_.pass2.added + 1); ++k) {
       if (AddItem(rng, kCatalog[UniformInt(rng, 0, 12)], true)) ++added;
     }
@@ -598,7 +600,12 @@ class OfficeBuilder {
   std::vector<Surface> desk_surfaces_;
   std::map<int, std::vector<Spot>> taken_;
   std::vector<Item> fixed_items_;
-  std::vector<int> changeable_;
+  // What pass 2 may relocate or remove, with the radius of its footprint.
+  struct Changeable {
+    int object;
+    double footprint_m;
+  };
+  std::vector<Changeable> changeable_;
   int candidates_ = 0;
 };
 

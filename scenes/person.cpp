@@ -166,9 +166,10 @@ std::vector<Eigen::Isometry3d> PersonPartPoses(const PersonJoints& j, double s) 
 
   for (int side = 0; side < 2; ++side) {
     const double y = side == 0 ? 1.0 : -1.0;  // left is +y
-    // Arm: shoulder flexion about y (forward = rotation by -angle), abduction about x.
+    // Arm: shoulder flexion about y (forward = rotation by -angle), abduction about x
+    // (the hanging arm's hand swings out to its own side, +y for the left arm).
     const Eigen::Isometry3d T_shoulder =
-        T_obj_torso * Pose(Rx(-y * j.shoulder_out[side]) * Ry(-j.shoulder[side]),
+        T_obj_torso * Pose(Rx(y * j.shoulder_out[side]) * Ry(-j.shoulder[side]),
                            Eigen::Vector3d(0, y * b.shoulder_width, b.shoulder_height) * s);
     poses[kUpperArmL + 2 * side] = T_shoulder;
     poses[kLowerArmL + 2 * side] =

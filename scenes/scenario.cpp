@@ -130,7 +130,8 @@ class FieldTable {
     Add("city.camera_speed_mps", Double(&y.camera_speed_mps, OpenClosed(0, 40), "city.camera_speed_mps"));
     Add("city.camera_height_m", Double(&y.camera_height_m, Closed(0.3, 5), "city.camera_height_m"));
     Add("city.block_size_m", Double(&y.block_size_m, Closed(25, 200), "city.block_size_m"));
-    Add("city.road_width_m", Double(&y.road_width_m, Closed(7, 30), "city.road_width_m"));
+    // Two parking lanes (2.55 m) and two driving lanes where two buses pass (city.cpp).
+    Add("city.road_width_m", Double(&y.road_width_m, Closed(11, 30), "city.road_width_m"));
     Add("city.sidewalk_width_m", Double(&y.sidewalk_width_m, Closed(1.5, 10), "city.sidewalk_width_m"));
     Add("city.parked_cars", Int(&y.parked_cars, 0, 500, "city.parked_cars"));
     Add("city.moving_cars", Int(&y.moving_cars, 0, 100, "city.moving_cars"));

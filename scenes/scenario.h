@@ -49,7 +49,7 @@ struct CitySpec {
   double camera_speed_mps = 6.0;
   double camera_height_m = 1.5;
   double block_size_m = 40.0;     // distance between street centre lines
-  double road_width_m = 10.0;
+  double road_width_m = 12.0;     // curb to curb: parking and a driving lane each way
   double sidewalk_width_m = 3.0;
   int parked_cars = 20;
   int moving_cars = 6;

@@ -179,6 +179,9 @@ struct World {
   std::vector<Light> lights;
   std::array<CameraRoute, 2> camera_route;  // indexed by PassIndex()
   SecondPassChanges pass2_changes;
+  // Moving cars and pedestrians of the scenario left out because no path tried kept their
+  // bodies clear of the others (a city denser than its streets hold).
+  int movers_left_out = 0;
 };
 
 // Time of frame `index` of a pass, seconds from the start of that pass.

@@ -166,7 +166,9 @@ std::vector<ObjectTrack> ObjectTracks(const scenes::World& world, scenes::Pass p
       sample.present = present;
       if (present) {
         sample.T_world_object = scenes::ObjectPoseAt(object, pass, sample.stamp_s);
-        sample.moving = scenes::ObjectMovesAt(object, pass, sample.stamp_s, frame_period_s);
+        // Moved since the previous frame: what a tracker comparing this frame with the
+        // ones before it can see (the first frame: over one frame period before it).
+        sample.moving = scenes::ObjectMovesAt(object, pass, sample.stamp_s - frame_period_s, frame_period_s);
       }
       for (const auto& instance : frames[i].instances) {
         if (instance.id == object.instance_id) sample.visible_pixels = instance.area_px;
@@ -243,6 +245,7 @@ class DatasetGeneration {
         threads_(options.encode_threads > 0 ? options.encode_threads
                                             : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()))) {
     summary_.gl_renderer = renderer_.gl_renderer();
+    summary_.movers_left_out = world_.movers_left_out;
     if (!world_.camera.distortion.IsZero()) lens_.emplace(renderer_.intrinsics(), world_.camera.distortion);
   }
 
@@ -253,7 +256,8 @@ class DatasetGeneration {
       WriteManifest(staging_->path(), {{"scenario", scenario_.name},
                                        {"seed", scenario_.seed},
                                        {"kind", world_.kind},
-                                       {"generator", "segslam generate"}});
+                                       {"generator", "segslam generate"},
+                                       {"movers_left_out", world_.movers_left_out}});
       if (options_.keep_complete_dataset && fs::exists(target_ / "manifest.json")) {
         summary_.kept_existing = true;  // the staging folder goes with staging_
       } else {

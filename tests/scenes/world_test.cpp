@@ -4,6 +4,10 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <tuple>
+#include <vector>
+
 namespace segslam::scenes {
 namespace {
 
@@ -65,6 +69,23 @@ TEST(WorldTest, WalkerLegsAndArmsSwingOverHalfAGaitCycle) {
   // Arms swing opposite to the legs of the same side.
   const Eigen::Vector3d elbow_l0 = (r0.inverse() * p0[kLowerArmL]).translation();
   EXPECT_LT(elbow_l0.x() * knee_l0.x(), 0.0);
+}
+
+TEST(WorldTest, AbductionSwingsEachArmOutToItsOwnSide) {
+  PersonJoints joints;  // upright, arms hanging
+  for (int side = 0; side < 2; ++side) {
+    joints.shoulder[side] = 0;
+    joints.elbow[side] = 0;
+    joints.shoulder_out[side] = 20 * M_PI / 180;
+  }
+  const std::vector<Eigen::Isometry3d> poses = PersonPartPoses(joints, 1.0);
+  // The elbow is the lower arm's origin, one upper arm length below the shoulder.
+  for (const auto& [shoulder, elbow, outward] : {std::tuple{kUpperArmL, kLowerArmL, 1.0},  // left is +y
+                                                 std::tuple{kUpperArmR, kLowerArmR, -1.0}}) {
+    const Eigen::Vector3d s = poses[shoulder].translation(), e = poses[elbow].translation();
+    const double angle = std::atan2(outward * (e.y() - s.y()), s.z() - e.z());
+    EXPECT_NEAR(angle, 20 * M_PI / 180, 1e-9);
+  }
 }
 
 TEST(WorldTest, StandingWalkerAndStillSitterDoNotMove) {
