@@ -385,6 +385,7 @@ ScenarioReport RunScenarioToReport(const ScenarioRunRequest& args) {
   report.report_dir = report_dir;
   // Figures before the documents, which show each figure that exists.
   for (const std::string& problem : DrawReportFigures(report)) fmt::print("figure not drawn: {}\n", problem);
+  if (cancel->load()) throw Error("scenario run: interrupted; no report written to " + report_dir.string());
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   WriteFileAtomically(report_dir / "scenario.yaml", report.effective_scenario_yaml + "\n");

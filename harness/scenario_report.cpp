@@ -16,6 +16,7 @@
 #include "core/pose.h"
 #include "core/tum_dataset.h"
 #include "harness/dataset_run.h"
+#include "harness/interrupt.h"
 #include "harness/machine.h"
 #include "harness/report_figures.h"
 #include "harness/slam_runner.h"
@@ -405,6 +406,10 @@ void DrawFeatureFigure(const ScenarioReport& report, const RepeatRun& run, const
   options.max_frames = FramesRun(sequence, report);
   options.tracker = report.bench.TrackerOverrides();
   options.tracker.record_features = true;
+  // A minute of SLAM again: Ctrl-C stops it (the scenario run then ends as interrupted).
+  options.on_frame = [](int, int) {
+    if (InterruptRequested()) throw Error("interrupted");
+  };
   const SlamRunResult rerun = RunSlamOnSequence(sequence, options);
   const std::optional<std::size_t> chosen = PickFeatureFigureFrame(rerun.frames);
   if (!chosen.has_value()) throw Error("no frame of pass 1 has feature records");
