@@ -677,7 +677,7 @@ class CityBuilder {
   };
 
   // Which slot holds which vehicle in each pass, so that no two parked vehicles touch:
-  // slots are 7 m apart, a truck is 7.2 m long, and pass 2 moves vehicles along the curb.
+  // stalls are 6.5 m long, a truck 7.2 m, and pass 2 moves vehicles along the curb.
   class ParkingLot {
    public:
     explicit ParkingLot(const std::vector<Slot>& slots) : slots_(slots), parked_(slots.size()), used_(slots.size()) {}
