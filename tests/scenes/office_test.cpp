@@ -33,10 +33,10 @@ TEST(OfficeTest, DeterministicAndSeeded) {
   EXPECT_NE(testing::HashWorld(BuildWorld(s)), a);
 }
 
-class OfficeMotionTest : public ::testing::TestWithParam<std::string> {};
-
-TEST_P(OfficeMotionTest, CameraStaysInTheRoomLookingAtTheDesk) {
-  const Scenario s = SmallOffice(GetParam());
+// The camera stays in the room, off every geom, 1 to 2.8 m from the main desk and
+// looking at it, and moves as its motion's name says.
+void ExpectCameraInTheRoomLookingAtTheDesk(const Scenario& s) {
+  const std::string motion = s.office.camera_motion;
   const World w = BuildWorld(s);
   ASSERT_EQ(w.frames_per_pass[0], s.office.frames);
   const Object* desk = MainDesk(w);
@@ -56,7 +56,7 @@ TEST_P(OfficeMotionTest, CameraStaysInTheRoomLookingAtTheDesk) {
       EXPECT_GT(distance, 1.0);
       EXPECT_LT(distance, 2.8);
       const double angle = std::acos(T.linear().col(2).dot((target - p).normalized()));
-      EXPECT_LT(angle, 40 * M_PI / 180) << GetParam() << " frame " << f;
+      EXPECT_LT(angle, 40 * M_PI / 180) << motion << " frame " << f;
       std::string what;
       EXPECT_FALSE(testing::InsideAnyGeom(w, pass, FrameStamp(w, f), p, 0.1, &what)) << "inside " << what;
       if (f > 0 && pass == Pass::kFirst) {
@@ -67,13 +67,27 @@ TEST_P(OfficeMotionTest, CameraStaysInTheRoomLookingAtTheDesk) {
     }
   }
   // Each motion does what its name says (over 40 frames, 1.3 s).
-  if (GetParam() == "static") {
+  if (motion == "static") {
     EXPECT_LT(travelled, 0.05);
-  } else if (GetParam() == "rpy") {
+  } else if (motion == "rpy") {
     EXPECT_GT(turned, 5 * travelled);
   } else {
     EXPECT_GT(travelled, 0.05);
   }
+}
+
+class OfficeMotionTest : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(OfficeMotionTest, CameraStaysInTheRoomLookingAtTheDesk) {
+  ExpectCameraInTheRoomLookingAtTheDesk(SmallOffice(GetParam()));
+}
+
+// In the smallest room a scenario may ask for, with every desk.
+TEST_P(OfficeMotionTest, CameraStaysInTheSmallestRoom) {
+  Scenario s = SmallOffice(GetParam());
+  ApplyOverride(s, "office.room_size_m", "[5, 4, 2.4]");
+  ApplyOverride(s, "office.desks", "4");
+  ExpectCameraInTheRoomLookingAtTheDesk(s);
 }
 
 INSTANTIATE_TEST_SUITE_P(Motions, OfficeMotionTest, ::testing::Values("xyz", "static", "rpy", "halfsphere"));

@@ -85,6 +85,9 @@ TEST(ScenarioTest, OutOfRangeNamesKeyAndValue) {
   EXPECT_EQ(ParseError("kind: office\npass2: {relocated_shift_m: 1}\n"),
             "my.yaml: pass2.relocated_shift_m: applies to city scenarios only (this one is 'office'); leave it 0");
   EXPECT_EQ(ParseError("city: {route_length_m: 5}\n"), "my.yaml: city.route_length_m: must be in [20, 2000] (got 5)");
+  EXPECT_EQ(ParseError("city: {road_width_m: 10}\n"), "my.yaml: city.road_width_m: must be in [11, 30] (got 10)");
+  EXPECT_EQ(ParseError("kind: office\noffice: {room_size_m: [4.5, 6, 2.8]}\n"),
+            "my.yaml: office.room_size_m: floor must be at least 5 m (x) by 4 m (y)");
   EXPECT_EQ(ParseError("city: {red_lights: -1}\n"), "my.yaml: city.red_lights: must be in [0, 50] (got -1)");
   EXPECT_EQ(ParseError("city: {red_light_s: 0.5}\n"), "my.yaml: city.red_light_s: must be in [1, 120] (got 0.5)");
   EXPECT_EQ(ParseError("kind: forest\n"), "my.yaml: kind: must be one of city, office (got 'forest')");
