@@ -482,8 +482,9 @@ class CityBuilder {
       // Parking slots along the curb, heading with the traffic on that side.
       const Vec2 heading = side > 0 ? d : Vec2(-d);
       const bool on_route = OnRoute(a, b);
-      // The row keeps 0.25 m off the stop lines at both ends (their far edge is 0.2 m
-      // past `clear`), so no vehicle stands on a stop line or a crosswalk.
+      // The row starts 0.25 m past the stop lines' centres (0.05 m past their edges) at
+      // both ends, and vehicles in its end slots stay within them (ParkingLot::Fits), so
+      // none stands on a stop line or a crosswalk.
       const int row = slots_.empty() ? 0 : slots_.back().row + 1;
       const int row_slots = static_cast<int>(std::floor((len - 0.5) / kSlotLengthM + 1e-9));
       const double row_start = clear + (len - row_slots * kSlotLengthM) / 2;
@@ -491,6 +492,7 @@ class CityBuilder {
         Slot slot;
         slot.curb = pa + d * (row_start + (k + 0.5) * kSlotLengthM) + curb;
         slot.to_road = -out;
+        slot.along_row = d;
         slot.yaw = YawOf(heading);
         slot.on_route = on_route;
         slot.row = row;
@@ -666,12 +668,14 @@ class CityBuilder {
   struct Slot {
     Vec2 curb;     // on the curb's edge, at the middle of the slot
     Vec2 to_road;  // unit, from the curb toward the street's centre line
+    Vec2 along_row;  // unit, toward the row's next slot (against the heading on one curb)
     double yaw = 0;
     bool on_route = false;
     int row = 0;  // the slots along one curb between two intersections share a row, in order
   };
 
-  // A vehicle parked in a slot in one pass: its shift along the curb and half length.
+  // A vehicle parked in a slot in one pass: its shift toward the row's next slot and its
+  // half length.
   struct ParkedVehicle {
     double shift_m = 0, half_length = 0;
   };
@@ -749,8 +753,7 @@ class CityBuilder {
     order.insert(order.end(), other_slots.begin(), other_slots.end());
     ParkingLot lot(slots_);
     auto pose_of = [&](const Slot& slot, const VehicleDims& dims, double shift_m) {
-      const Vec2 centre = slot.curb + slot.to_road * (kCurbGapM + dims.half_width) +
-                          shift_m * Vec2(std::cos(slot.yaw), std::sin(slot.yaw));
+      const Vec2 centre = slot.curb + slot.to_road * (kCurbGapM + dims.half_width) + shift_m * slot.along_row;
       return PoseXYZYaw(At(centre, 0.0), slot.yaw + Uniform(rng, -0.03, 0.03));
     };
 
@@ -1216,13 +1219,16 @@ class CityBuilder {
       p.start_offset_m = lanes.f0 + Uniform(rng, 5.0, 25.0);
       return p;
     }
-    const double slack = 0.05 * a;
+    // Later attempts widen the ranges, up to three times the speed ahead and 80 m more
+    // gap (PlaceMover's retries go on with the widest).
+    const int widen = std::min(a, 39);
+    const double slack = 0.05 * widen;
     if (rank == 0) {
       p.speed_mps = std::max(spec_.camera_speed_mps, spec_.moving_car_speed_mps) * Uniform(rng, 1.0, 1.04 + slack);
-      p.start_offset_m = lanes.f0 + Uniform(rng, 7.5, 10.0 + 2 * a) + (half_length - 2.45);
+      p.start_offset_m = lanes.f0 + Uniform(rng, 7.5, 10.0 + 2 * widen) + (half_length - 2.45);
     } else {
       p.speed_mps = previous_speed * Uniform(rng, 1.0, 1.03 + slack);
-      p.start_offset_m = lanes.f0 + previous_gap + Uniform(rng, 11.0, 16.0 + 2 * a) + (half_length - 2.45);
+      p.start_offset_m = lanes.f0 + previous_gap + Uniform(rng, 11.0, 16.0 + 2 * widen) + (half_length - 2.45);
     }
     return p;
   }
@@ -1305,8 +1311,8 @@ class CityBuilder {
       } else {
         make = [&, rank = crossing++](int a) { return CrossingMotion(rng, crossings, rank, n_crossing, a); };
       }
-      const bool placed = PlaceMover(index, traffic.present, hl, hw, /*car=*/true, /*min_camera_m=*/3.15, 40, make);
-      if (queued && placed) {
+      const bool kept = PlaceMover(index, traffic.present, hl, hw, /*car=*/true, /*min_camera_m=*/3.15, 40, make);
+      if (queued && kept) {
         const PathMotion& placed = world_.objects[index].placement[traffic.present[0] ? 0 : 1].path;
         ahead_speed = placed.speed_mps;
         ahead_gap = placed.start_offset_m - lanes.f0;

@@ -118,7 +118,7 @@ class FieldTable {
 
     SecondPassSpec& p = s->pass2;
     Add("pass2.relocated_share", Double(&p.relocated_share, Closed(0, 1), "pass2.relocated_share"));
-    Add("pass2.relocated_shift_m", Double(&p.relocated_shift_m, Closed(0, 3), "pass2.relocated_shift_m"));
+    Add("pass2.relocated_shift_m", Double(&p.relocated_shift_m, Closed(0, 2.5), "pass2.relocated_shift_m"));
     Add("pass2.removed_share", Double(&p.removed_share, Closed(0, 1), "pass2.removed_share"));
     Add("pass2.added", Int(&p.added, 0, 200, "pass2.added"));
     Add("pass2.camera_offset_m", Vec3(&p.camera_offset_m, Closed(-5, 5), "pass2.camera_offset_m"));

@@ -32,10 +32,12 @@ struct SensorSpec {
 // The changes of pass 2 relative to pass 1.
 struct SecondPassSpec {
   double relocated_share = 0.3;  // share of parked cars / moveable objects moved, [0, 1]
-  // City only. 0: a relocated car is parked again in a free slot elsewhere. > 0: in its
-  // own slot, moved along the curb by 0.5 to 1 times this (either way; at most what the
-  // gap to the neighbouring slots allows, so trucks hardly move): a resident's car back
-  // in front of the house, the case where its old map points still match, [0, 3] m.
+  // City only. 0: a relocated car is parked again in a free stall elsewhere. > 0: moved
+  // along the curb by 0.5 to 1 times this, either way, as far as the vehicles around it
+  // allow (into an empty neighbouring stall only as far as still leaves room for a car):
+  // a resident's car back in front of the house, the case where its old map points still
+  // match, [0, 2.5] m. One with less room than half this (a truck, or a car between
+  // trucks) is parked in a free stall elsewhere.
   double relocated_shift_m = 0.0;
   double removed_share = 0.1;    // share removed, [0, 1]
   int added = 2;                 // new parked / moveable objects

@@ -866,10 +866,10 @@ SimulatedSegmenter::SimulatedSegmenter(const fs::path& sequence_dir,
         TrackState& state = states[s.frame];
         state.visible_pixels = s.visible_pixels;
         state.moving = s.moving;
-        // "moving" means between this frame and the next: the speed over the same step
-        // (the last sample has none: the step before it).
+        // "moving" means since the previous frame: the speed over the same step (the
+        // first sample has none: the step after it).
         if (!s.moving || track.samples.size() < 2) continue;
-        const size_t from = std::min(k, track.samples.size() - 2);
+        const size_t from = std::max<size_t>(k, 1) - 1;
         const TrackSample& a = track.samples[from];
         const TrackSample& b = track.samples[from + 1];
         const StampedPose* pose =

@@ -80,8 +80,8 @@ TEST(ScenarioTest, OutOfRangeNamesKeyAndValue) {
   EXPECT_EQ(ParseError("camera: {width: 8}\n"), "my.yaml: camera.width: must be in [16, 4096] (got 8)");
   EXPECT_EQ(ParseError("pass2: {relocated_share: 1.5}\n"),
             "my.yaml: pass2.relocated_share: must be in [0, 1] (got 1.5)");
-  EXPECT_EQ(ParseError("pass2: {relocated_shift_m: 4}\n"),
-            "my.yaml: pass2.relocated_shift_m: must be in [0, 3] (got 4)");
+  EXPECT_EQ(ParseError("pass2: {relocated_shift_m: 3}\n"),
+            "my.yaml: pass2.relocated_shift_m: must be in [0, 2.5] (got 3)");
   EXPECT_EQ(ParseError("kind: office\npass2: {relocated_shift_m: 1}\n"),
             "my.yaml: pass2.relocated_shift_m: applies to city scenarios only (this one is 'office'); leave it 0");
   EXPECT_EQ(ParseError("city: {route_length_m: 5}\n"), "my.yaml: city.route_length_m: must be in [20, 2000] (got 5)");
