@@ -5,7 +5,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <set>
+#include <string>
+#include <utility>
+#include <vector>
 
 namespace segslam::scenes {
 namespace {
@@ -127,6 +132,55 @@ TEST(OfficeTest, PeopleAndSecondPassChanges) {
   EXPECT_EQ(moveable, s.office.moveable_objects);
   EXPECT_GE(w.lights.size(), 2u);
   EXPECT_FALSE(w.lights[0].directional);
+}
+
+// Radius of a rigid object's footprint about its origin, from its geoms' boxes.
+double FootprintRadius(const Object& o) {
+  double radius = 0;
+  for (const Part& part : o.parts) {
+    for (const Geom& g : part.geoms) {
+      const Eigen::Vector3d half = g.shape == Shape::kBox || g.shape == Shape::kEllipsoid
+                                       ? g.size
+                                       : Eigen::Vector3d(g.size.x(), g.size.x(), g.size.x());
+      const Eigen::Vector2d extent = (g.T_parent_geom.linear().cwiseAbs() * half).head<2>();
+      const Eigen::Vector2d centre = g.T_parent_geom.translation().head<2>();
+      for (double x : {-1.0, 1.0}) {
+        for (double y : {-1.0, 1.0}) radius = std::max(radius, (centre + Eigen::Vector2d(x * extent.x(), y * extent.y())).norm());
+      }
+    }
+  }
+  return radius;
+}
+
+// Items on desks and on the floor keep clear of each other in both passes, relocated
+// ones included (each with its own footprint).
+TEST(OfficeTest, ItemsDoNotOverlapInEitherPass) {
+  Scenario s = SmallOffice("xyz");
+  ApplyOverride(s, "office.moveable_objects", "30");
+  ApplyOverride(s, "pass2.removed_share", "0");
+  ApplyOverride(s, "pass2.relocated_share", "1");
+  const World w = BuildWorld(s);
+  ASSERT_GE(w.pass2_changes.relocated.size(), 15u);
+  const std::set<std::string> items = {"cup",    "bottle", "book",       "laptop",  "cell phone", "remote",
+                                       "bowl",   "teddy bear", "backpack", "handbag", "keyboard",  "mouse"};
+  for (Pass pass : kBothPasses) {
+    std::vector<std::pair<const Object*, Eigen::Vector3d>> placed;
+    for (const Object& o : w.objects) {
+      const Placement& p = o.placement[PassIndex(pass)];
+      if (p.present && items.count(o.category_name)) placed.push_back({&o, p.T_world_object.translation()});
+    }
+    for (std::size_t i = 0; i < placed.size(); ++i) {
+      for (std::size_t j = i + 1; j < placed.size(); ++j) {
+        const auto& [a, pa] = placed[i];
+        const auto& [b, pb] = placed[j];
+        if (std::abs(pa.z() - pb.z()) > 0.05) continue;  // on other surfaces
+        // The radii FreeSpot keeps apart round the geoms' corners by up to 2 cm.
+        EXPECT_GT((pa - pb).head<2>().norm(), FootprintRadius(*a) + FootprintRadius(*b) - 0.02)
+            << PassName(pass) << ": " << a->category_name << " " << a->instance_id << " and " << b->category_name
+            << " " << b->instance_id;
+      }
+    }
+  }
 }
 
 TEST(OfficeTest, WalkingScenariosKeepPeopleInView) {
