@@ -51,7 +51,7 @@ int RunGenerate(const GenerateArgs& args) {
              summary.FramesPerSecond(), sim::GlBackendName(options.backend), summary.gl_renderer);
   if (summary.movers_left_out > 0) {
     fmt::print("note: {} of the scenario's moving cars and pedestrians were left out: no path tried kept them "
-               "clear of the others (manifest.json's movers_left_out)\n",
+               "clear of the others (manifest.json: extra.movers_left_out)\n",
                summary.movers_left_out);
   }
   return 0;

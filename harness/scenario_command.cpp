@@ -32,6 +32,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/json_file.h"
 #include "core/tum_dataset.h"
 #include "harness/commands.h"
 #include "harness/dataset_cache.h"
@@ -364,6 +365,9 @@ ScenarioReport RunScenarioToReport(const ScenarioRunRequest& args) {
   fs::remove_all(report_dir / "figures");
   ScenarioReport report;
   report.dataset_from_cache = EnsureDataset(scenario, dataset, args, backend, cancel);
+  // Datasets of older builds have no count: none were left out then.
+  report.movers_left_out =
+      ReadJsonFile(dataset / "manifest.json").value("extra", nlohmann::json::object()).value("movers_left_out", 0);
   fs::create_directories(report_dir / "runs");
   std::vector<RepeatRun> runs = PlanRuns(bench);
   std::fflush(stdout);

@@ -695,6 +695,7 @@ nlohmann::json ScenarioReport::ToJson() const {
       {"machine", MachineDescription()},
       {"dataset", dataset_dir},
       {"dataset_from_cache", dataset_from_cache},
+      {"dataset_movers_left_out", movers_left_out},
       {"frames_per_pass", frames_per_pass},
       {"bench",
        {{"modes", bench.modes}, {"repeats", bench.repeats}, {"segmenter", bench.segmenter},
@@ -739,7 +740,11 @@ ReportDocument ScenarioReport::ToDocument() const {
   document.AddMetadata("code version", code_version);
   document.AddMetadata("machine", MachineLine(MachineDescription()));
   document.AddMetadata("dataset", dataset_dir + (dataset_from_cache ? " (from the cache)" : "") +
-                                      (frames_per_pass > 0 ? fmt::format(", first {} frames per pass", frames_per_pass) : ""));
+                                      (frames_per_pass > 0 ? fmt::format(", first {} frames per pass", frames_per_pass) : "") +
+                                      (movers_left_out > 0 ? fmt::format(", {} of the scenario's moving cars and pedestrians "
+                                                                         "left out (no path clear of the others)",
+                                                                         movers_left_out)
+                                                           : ""));
   document.AddMetadata("bench", fmt::format("modes {}, {} repeat(s), segmenter {} with seeds {}..{}; deterministic modes "
                                             "ran once",
                                             Join(bench.modes, ", "), bench.repeats, bench.SegmenterLabel(), bench.seed,

@@ -131,6 +131,7 @@ struct ScenarioReport {
   std::string code_version;             // git describe at configure time
   std::string dataset_dir;
   bool dataset_from_cache = false;
+  int movers_left_out = 0;  // the dataset's moving actors without a clear path (manifest.json)
   int frames_per_pass = 0;  // --frames; 0 = the scenario's own
   BenchSettings bench;
   std::vector<RepeatRun> runs;

@@ -1,11 +1,14 @@
 // The command line's answers to bad input: one line on stderr, a non-zero exit code,
 // and nothing left at the output path.
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <array>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <regex>
 #include <string>
 #include <csignal>
 #include <sys/wait.h>
@@ -126,6 +129,28 @@ TEST_F(CliBadInputTest, ExistingOutputIsKeptWithoutForce) {
   EXPECT_NE(result.exit_code, 0);
   EXPECT_NE(result.stderr_text.find("already exists"), std::string::npos) << result.stderr_text;
   EXPECT_TRUE(fs::exists(out / "keep.txt"));
+}
+
+// A crowd denser than the streets hold is not refused: generate leaves out the movers
+// that find no path clear of the others, says how many, and records it in the manifest.
+TEST_F(CliBadInputTest, CrowdDenserThanTheStreetsIsThinnedAndSaid) {
+  const fs::path out = dir_ / "rush", printed = dir_ / "stdout.txt";
+  const std::string command = std::string(SEGSLAM_BINARY) + " generate " + SEGSLAM_SOURCE_DIR +
+                              "/scenarios/city_rush_hour.yaml --out " + out.string() +
+                              " --frames 1 -q --set camera.width=160 --set camera.height=120 >" + printed.string() +
+                              " 2>&1";
+  const int status = std::system(command.c_str());
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << command;
+  std::ifstream in(printed);
+  const std::string text((std::istreambuf_iterator<char>(in)), {});
+  std::smatch note;
+  ASSERT_TRUE(std::regex_search(text, note, std::regex("note: ([0-9]+) of the scenario's moving cars and pedestrians")))
+      << text;
+  const int left_out = std::stoi(note[1]);
+  EXPECT_GT(left_out, 0);
+  EXPECT_LT(left_out, 140 / 2) << "most of rush hour's 140 movers find room";
+  std::ifstream manifest(out / "manifest.json");
+  EXPECT_EQ(nlohmann::json::parse(manifest).at("extra").at("movers_left_out").get<int>(), left_out);
 }
 
 TEST_F(CliBadInputTest, UnknownGlBackend) {
