@@ -330,9 +330,7 @@ class CityBuilder {
         // Drawn even where the scenario names the kind, so the other lights draw as before.
         r.lead_kind = VehicleKind(rng, /*allow_bus=*/true);
         if (spec_.red_light_lead != "random") r.lead_kind = spec_.red_light_lead;
-        double half_length, half_width;
-        VehicleSize(r.lead_kind, &half_length, &half_width);
-        r.camera_stop_s -= 2 * half_length + kQueueGapM;
+        r.camera_stop_s -= 2 * Dims(r.lead_kind).half_length + kQueueGapM;
       }
       camera_halts_.push_back({r.camera_stop_s, spec_.red_light_s});
       red_lights_.push_back(r);
@@ -1084,10 +1082,6 @@ class CityBuilder {
   static VehicleDims Dims(const std::string& kind) {
     return kind == "bus" ? kBusDims : kind == "truck" ? kTruckDims : kCarDims;
   }
-  static void VehicleSize(const std::string& kind, double* half_length, double* half_width) {
-    *half_length = Dims(kind).half_length;
-    *half_width = Dims(kind).half_width;
-  }
 
   // The vehicles the camera waits behind at red lights. Each comes along the camera's
   // lane ahead of it at the camera's speed, stands at the stop line from a few seconds
@@ -1120,10 +1114,9 @@ class CityBuilder {
         pts.push_back(corner);
         pts.push_back(corner + exit * 300.0);
       }
-      double half_length, half_width;
-      VehicleSize(r.lead_kind, &half_length, &half_width);
-      const double stand_at = stop_arc - half_length;  // its front at the stop line
-      PlaceMover(index, traffic.present, half_length, half_width, /*car=*/true, /*min_camera_m=*/3.15, 40, [&](int) {
+      const VehicleDims dims = Dims(r.lead_kind);
+      const double stand_at = stop_arc - dims.half_length;  // its front at the stop line
+      PlaceMover(index, traffic.present, dims.half_length, dims.half_width, /*car=*/true, /*min_camera_m=*/3.15, 40, [&](int) {
         PathMotion p = DrivePath(pts);
         p.speed_mps = v;
         p.accel_mps2 = kCarAccelMps2;
@@ -1300,18 +1293,19 @@ class CityBuilder {
       const bool queued = role == CarRole::kAhead && !lanes.two_lanes;
       Object& o = b_.AddObject(queued ? "car" : VehicleKind(rng, role != CarRole::kAhead));
       o.parts.push_back(MakeVehicle(rng, o.category_name));
-      double hl, hw;
-      VehicleSize(o.category_name, &hl, &hw);
+      const double hl = Dims(o.category_name).half_length, hw = Dims(o.category_name).half_width;
       const int index = static_cast<int>(world_.objects.size()) - 1;
       std::function<PathMotion(int)> make;
       if (role == CarRole::kAhead) {
-        make = [&, rank = ahead++, hl](int a) { return AheadMotion(rng, lanes, rank, hl, a, ahead_gap, ahead_speed); };
+        make = [&, rank = ahead, hl](int a) { return AheadMotion(rng, lanes, rank, hl, a, ahead_gap, ahead_speed); };
       } else if (role == CarRole::kOncoming) {
         make = [&, rank = oncoming++](int a) { return OncomingMotion(rng, lanes, turns, rank, n_oncoming, a); };
       } else {
         make = [&, rank = crossing++](int a) { return CrossingMotion(rng, crossings, rank, n_crossing, a); };
       }
       const bool kept = PlaceMover(index, traffic.present, hl, hw, /*car=*/true, /*min_camera_m=*/3.15, 40, make);
+      // A car left out does not count: the next one queues behind the last one placed.
+      if (role == CarRole::kAhead && kept) ++ahead;
       if (queued && kept) {
         const PathMotion& placed = world_.objects[index].placement[traffic.present[0] ? 0 : 1].path;
         ahead_speed = placed.speed_mps;
