@@ -940,8 +940,9 @@ class CityBuilder {
     std::vector<char> present;  // per sample: in the world at that time
     double half_length = 0.3, half_width = 0.3;
     bool car = false;
-    // Radius of the footprint inflated by each clearance margin (Clearance).
-    double radius_with_car_margin = 0, radius_with_person_margin = 0;
+    // Radius of the footprint, bare (BodiesClear) and inflated by each clearance margin
+    // (Clearance).
+    double radius = 0, radius_with_car_margin = 0, radius_with_person_margin = 0;
   };
   static constexpr double kCarMarginM = 0.3;     // cars keep 0.6 m between bodies
   static constexpr double kPersonMarginM = 0.1;  // people 0.2 m from anyone
@@ -963,6 +964,7 @@ class CityBuilder {
     tr.half_length = half_length;
     tr.half_width = half_width;
     tr.car = car;
+    tr.radius = std::hypot(half_length, half_width);
     tr.radius_with_car_margin = std::hypot(half_length + kCarMarginM, half_width + kCarMarginM);
     tr.radius_with_person_margin = std::hypot(half_length + kPersonMarginM, half_width + kPersonMarginM);
     for (Pass pass : kBothPasses) {  // the order of samples_
@@ -1020,12 +1022,11 @@ class CityBuilder {
   // Whether the track's body touches no placed actor's body at any sample (footprints
   // without margins; a separating-axis ratio >= 1 for two rectangles means apart).
   bool BodiesClear(const Track& tr) const {
-    const double radius = std::hypot(tr.half_length, tr.half_width);
     for (std::size_t i = 0; i < samples_.size(); ++i) {
       if (!tr.present[i]) continue;
       for (const Track& other : tracks_) {
         if (!other.present[i]) continue;
-        const double radii = radius + std::hypot(other.half_length, other.half_width);
+        const double radii = tr.radius + other.radius;
         if ((other.pos[i] - tr.pos[i]).squaredNorm() > radii * radii) continue;
         if (SatRatio(tr, other, i, 0.0) < 1.0) return false;
       }
