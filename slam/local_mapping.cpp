@@ -61,6 +61,8 @@ void Tracker::Impl::CreateKeyframe() {
     point->id = map->NextPointId();
     point->position_w = T_wc * current.features.points_cam[i];
     point->instance_id = current.instance[i];
+    point->labelled_sightings = judged ? 1 : 0;
+    point->instance_sightings = judged && current.instance[i] != 0 ? 1 : 0;
     point->first_keyframe_id = keyframe->id;
     point->first_stamp_s = current.stamp_s;
     point->last_matched_frame = current.index;
@@ -80,8 +82,10 @@ void Tracker::Impl::CreateKeyframe() {
   last_keyframe_frame = current.index;
   result.keyframe = true;
 
+  // Culling runs in localization too: the loaded map's points are fixed and never
+  // culled, and the tracking map's new points need it as much as a mapping run's.
+  CullRecentPoints(keyframe);
   if (!localization_mode) {
-    CullRecentPoints(keyframe);
     if (options.local_bundle_adjustment) {
       const Clock::time_point start = Clock::now();
       LocalBundleAdjustment();

@@ -112,7 +112,7 @@ LongTermMapData Map::ToLongTermMap(const PinholeCamera& camera, bool include_ins
   }
   for (const auto& point : points_) {
     if (point->bad) continue;
-    if (point->instance_id != 0 && !include_instances) continue;
+    if (!include_instances && (point->instance_id != 0 || point->SeenMostlyOnInstances())) continue;
     if (point->NumObservations() < min_observations) continue;
     StoredMapPoint stored;
     stored.id = point->id;

@@ -51,6 +51,12 @@ struct MapPoint {
   int visible_count = 1;                    // frames whose frustum it was in
   int found_count = 1;                      // frames that matched it
   int num_loaded_observations = 0;          // observations recorded in the map file
+  // Frames with instance masks that matched it (its own first included), and how many
+  // of them saw it on an instance. A point made where a mask missed an object is labelled
+  // background for good; the later frames that see it on the object keep it out of the
+  // long-term map (SeenMostlyOnInstances).
+  int labelled_sightings = 0;
+  int instance_sightings = 0;
   std::map<Keyframe*, int, KeyframeIdLess> observations;  // keyframe -> keypoint index
   // Bookkeeping of the tracker, so one frame does not match or count a point twice.
   int last_matched_frame = -1;
@@ -60,6 +66,10 @@ struct MapPoint {
     return static_cast<int>(observations.size()) + num_loaded_observations;
   }
   double FoundRatio() const { return double(found_count) / std::max(1, visible_count); }
+  // At least half of its labelled sightings were on an instance: not known to stay put.
+  bool SeenMostlyOnInstances() const {
+    return instance_sightings > 0 && 2 * instance_sightings >= labelled_sightings;
+  }
   // Pyramid level at which a point at `distance_m` should be detected (ORB-SLAM's
   // scale prediction), clamped to the pyramid.
   int PredictLevel(double distance_m, const OrbExtractor& extractor) const;
@@ -101,8 +111,9 @@ class Map {
   // Adds the points of a long-term map file as fixed points.
   void LoadFixedPoints(const LongTermMapData& data);
   // Background points with at least `min_observations` observations (fixed ones
-  // included) as a long-term map; `include_instances` also keeps static instance points
-  // (used by the `plain` baseline, which knows no instances).
+  // included) as a long-term map, leaving out those seen mostly on instances;
+  // `include_instances` keeps every point instead (the `plain` baseline, which knows no
+  // instances).
   LongTermMapData ToLongTermMap(const PinholeCamera& camera, bool include_instances,
                                 int min_observations) const;
 

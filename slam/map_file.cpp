@@ -40,6 +40,9 @@ constexpr std::size_t kPointBytes = 8 + 3 * 8 + 3 * 4 + 2 * 4 + kOrbDescriptorBy
 // A keyframe rotation further than this from orthonormal is a corrupt or mis-built pose;
 // stored doubles from a real rotation are orthonormal to ~1e-15.
 constexpr double kRotationTolerance = 1e-6;
+// A loaded point's observation count is added to in int arithmetic as the localizer
+// observes it; no real map comes near this bound, far below INT_MAX.
+constexpr std::uint32_t kMaxObservationsPerPoint = 1u << 24;
 
 class PayloadWriter {
  public:
@@ -185,6 +188,10 @@ std::string FindInvalidValue(const LongTermMapData& map) {
     if (point.min_distance_m < 0 || point.min_distance_m > point.max_distance_m) {
       return fmt::format("map point {} has an invalid distance range [{}, {}] m", point.id,
                          point.min_distance_m, point.max_distance_m);
+    }
+    if (point.num_observations > kMaxObservationsPerPoint) {
+      return fmt::format("map point {} claims {} observations (at most {})", point.id,
+                         point.num_observations, kMaxObservationsPerPoint);
     }
   }
   return "";

@@ -307,6 +307,14 @@ TEST_F(MapFileTest, InvalidValuesInsideAValidFileAreRefused) {
   std::memset(&zero_width[0], 0, 4);
   WriteBytes(file, WithPayload(bytes, zero_width));
   ExpectLoadFails(file, "invalid camera");
+
+  // The point's observation count (after id 8, position 24, direction 12, distances 8,
+  // descriptor 32): 2^31 would overflow the localizer's int count.
+  std::string huge_count = PayloadOf(bytes);
+  const std::uint32_t count = 0x80000000u;
+  std::memcpy(&huge_count[40 + 8 + 8 + 8 + 84], &count, sizeof count);
+  WriteBytes(file, WithPayload(bytes, huge_count));
+  ExpectLoadFails(file, "claims 2147483648 observations");
 }
 
 TEST_F(MapFileTest, SaveRefusesWhatLoadWouldRefuse) {
@@ -316,6 +324,9 @@ TEST_F(MapFileTest, SaveRefusesWhatLoadWouldRefuse) {
   EXPECT_THROW(SaveLongTermMap(file, map), Error);
   map = MakeMap(1, 2);
   map.keyframes[0].T_wc.linear() *= 2.0;  // a scaled matrix is no rotation
+  EXPECT_THROW(SaveLongTermMap(file, map), Error);
+  map = MakeMap(1, 2);
+  map.points[0].num_observations = 0x80000000u;
   EXPECT_THROW(SaveLongTermMap(file, map), Error);
   EXPECT_FALSE(fs::exists(file));
 }

@@ -302,6 +302,35 @@ TEST(TrackerTest, LocalizesOnALoadedLongTermMapWithoutChangingIt) {
   EXPECT_EQ(localizer.ExportLongTermMap(true).points.size(), map.points.size());
 }
 
+// The points a localization run adds to its own tracking map are culled as a mapping
+// run's are: two keyframes after it was made, a point no second keyframe saw is gone.
+TEST(TrackerTest, LocalizationCullsItsNewPoints) {
+  const PinholeCamera camera = TestCamera();
+  const auto room = RoomQuads(4);
+  const LongTermMapData map = MapOfFirstVisit(camera, room, /*include_instances=*/true);
+  Tracker localizer(camera);
+  localizer.LoadLongTermMap(map, "test map");
+  int keyframes = 0;
+  for (int i = 0; i < 45; ++i) {
+    const Eigen::Isometry3d truth = Eigen::Translation3d(0, 0.1, 0) * PathPose(44 - i);
+    const FrameResult result =
+        localizer.Track(RenderQuads(room, camera, truth, i, i / 30.0).frame, nullptr, SlamMode::kPlain);
+    ASSERT_TRUE(result.localized()) << "frame " << i;
+    keyframes += result.keyframe;
+  }
+  ASSERT_GE(keyframes, 3);
+  const std::uint64_t newest_keyframe_id = localizer.map().keyframes().back()->id;
+  int new_points = 0;
+  for (const auto& point : localizer.map().points()) {
+    if (point->bad || point->fixed) continue;
+    ++new_points;
+    if (newest_keyframe_id - point->first_keyframe_id >= 2) {
+      EXPECT_GE(point->NumObservations(), 2) << "point " << point->id << " of keyframe " << point->first_keyframe_id;
+    }
+  }
+  EXPECT_GT(new_points, 0);
+}
+
 TEST(TrackerTest, MapFromAnotherCameraIsRefused) {
   LongTermMapData map;
   map.camera = PinholeCamera::FromVerticalFov(320, 240, 50);
