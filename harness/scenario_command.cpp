@@ -274,6 +274,21 @@ std::vector<Expectation> CheckableExpectations(std::vector<Expectation> expectat
   return expectations;
 }
 
+// A report folder is marked as one when a run first writes to it. Its earlier report is
+// replaced (runs/ and figures/ removed whole), so a folder with other contents and no
+// mark, nor the results.json or scenario.yaml of a report made before marks were kept,
+// is refused rather than emptied.
+void ClaimReportFolder(const fs::path& report_dir) {
+  const fs::path mark = report_dir / ".segslam-report";
+  if (fs::exists(report_dir) && !fs::is_empty(report_dir) && !fs::exists(mark) &&
+      !fs::exists(report_dir / "results.json") && !fs::exists(report_dir / "scenario.yaml")) {
+    throw FileError(report_dir,
+                    "holds other files and no segslam scenario report, which a run would replace; choose another --out");
+  }
+  fs::create_directories(report_dir);
+  WriteFileAtomically(mark, "A segslam scenario report: `segslam scenario run` replaces what is here.\n");
+}
+
 // The scenario's dataset in `dataset`, generated once per effective scenario and code
 // version. The generator writes into a staging folder and renames it, so an existing
 // folder is complete. Returns whether it was there already.
@@ -356,6 +371,7 @@ ScenarioReport RunScenarioToReport(const ScenarioRunRequest& args) {
   for (const std::string& name : skipped) fmt::print("expectation {} not checked: --modes leaves its mode out\n", name);
 
   std::fflush(stdout);
+  ClaimReportFolder(report_dir);
   // An earlier report in the same place goes first (before a generation that may fail or
   // be interrupted), so a run that stops half-way leaves no results.json or JUnit file
   // that looks complete.
@@ -386,6 +402,7 @@ ScenarioReport RunScenarioToReport(const ScenarioRunRequest& args) {
   report.bench = bench;
   report.spreads = Summarize(report.runs);
   report.checks = CheckExpectations(expectations, report.spreads);
+  report.not_checked = skipped;
   report.report_dir = report_dir;
   // Figures before the documents, which show each figure that exists.
   for (const std::string& problem : DrawReportFigures(report)) fmt::print("figure not drawn: {}\n", problem);
@@ -408,17 +425,24 @@ int RunScenario(const ScenarioRunArgs& args) {
   const fs::path& report_dir = report.report_dir;
   fmt::print("{}", report.ToText());
   int failed = 0;
-  if (!report.checks.empty()) fmt::print("\nexpectations (medians over repeats):\n");
+  if (!report.checks.empty() || !report.not_checked.empty()) fmt::print("\nexpectations (medians over repeats):\n");
   for (const ExpectationResult& check : report.checks) {
     fmt::print("  {}  {:<40} {:>12} {}\n", check.passed ? "PASS" : "FAIL", check.expectation.name.text,
                std::isnan(check.value) ? std::string("n/a") : fmt::format("{:.6g}", check.value),
                check.expectation.Bounds());
     if (!check.passed) ++failed;
   }
-  fmt::print("scenario {}: {} of {} expectations passed, {} runs in {:.1f} s, report in {}\n", scenario_name,
-             report.checks.size() - failed, report.checks.size(), report.runs.size(), report.seconds,
+  for (const std::string& name : report.not_checked) fmt::print("  SKIP  {:<40} --modes leaves its mode out\n", name);
+  const std::string not_checked =
+      report.not_checked.empty() ? std::string() : fmt::format(", {} not checked", report.not_checked.size());
+  fmt::print("scenario {}: {} of {} expectations passed{}, {} runs in {:.1f} s, report in {}\n", scenario_name,
+             report.checks.size() - failed, report.checks.size(), not_checked, report.runs.size(), report.seconds,
              report_dir.string());
-  return failed == 0 ? 0 : kExitExpectationFailed;
+  if (report.checks.empty() && !report.not_checked.empty()) {
+    fmt::print("scenario {}: no expectation was checked (--modes leaves out a mode of each); that is not a pass\n",
+               scenario_name);
+  }
+  return report.Passed() ? 0 : kExitExpectationFailed;
 }
 
 struct PruneCacheArgs {

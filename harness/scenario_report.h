@@ -137,9 +137,14 @@ struct ScenarioReport {
   std::vector<RepeatRun> runs;
   SpreadTable spreads;
   std::vector<ExpectationResult> checks;
+  // The scenario's expectations this run could not check (--modes left a mode out).
+  std::vector<std::string> not_checked;
   double seconds = 0;
   std::filesystem::path report_dir;  // where figures are looked for (not written out)
 
+  // Every checked expectation passed, and at least one was checked where the scenario
+  // has any: a run whose --modes leaves every expectation out verified nothing.
+  bool Passed() const;
   nlohmann::json ToJson() const;
   // The tables (and the figures present in report_dir) as one document.
   ReportDocument ToDocument() const;

@@ -136,9 +136,15 @@ int RunSegEval(const SegEvalArgs& args) {
                Points(r.raw.AP50), Points(r.raw.mIoU), Points(r.refined.mAP), Points(r.refined.AP50),
                Points(r.refined.mIoU), Points(r.refined.mAP - r.raw.mAP),
                Points(r.refined.AP50 - r.raw.AP50), Points(r.refined.mIoU - r.raw.mIoU));
+    fmt::print("{:<10} {:>6} | {} {} {} | {:^20} | {} {} {}   raw, scores >= {}\n", "", "", Points(r.raw_confident.mAP),
+               Points(r.raw_confident.AP50), Points(r.raw_confident.mIoU), "", Points(r.refined.mAP - r.raw_confident.mAP),
+               Points(r.refined.AP50 - r.raw_confident.AP50), Points(r.refined.mIoU - r.raw_confident.mIoU),
+               r.raw_confident_min_score);
     json["sequences"].push_back({{"sequence", r.name},
                                  {"frames", r.frames},
                                  {"raw", r.raw.ToJson()},
+                                 {"raw_confident", r.raw_confident.ToJson()},
+                                 {"raw_confident_min_score", r.raw_confident_min_score},
                                  {"refined", r.refined.ToJson()},
                                  {"refine_ms_median", r.refine_ms_median},
                                  {"decisions",

@@ -69,7 +69,10 @@ std::unique_ptr<seg::Segmenter> MakeSegmenter(const TumSequence& sequence, const
     return std::make_unique<seg::SimulatedSegmenter>(sequence.dir(), preset, options.segmenter_seed,
                                                      options.segmenter);
   }
-  if (options.masks != "gt") return std::make_unique<seg::ExternalMaskSegmenter>(options.masks, sequence);
+  if (options.masks != "gt") {
+    return std::make_unique<seg::ExternalMaskSegmenter>(options.masks, sequence,
+                                                        static_cast<size_t>(std::max(0, options.max_frames)));
+  }
   return nullptr;
 }
 
@@ -111,12 +114,12 @@ class MaskSource {
   std::unordered_set<std::uint16_t> moveable_;
 };
 
-// A frame's refined masks in the external-mask layout (seg/external_masks.h), on the
-// sequence's stored images, so a later run or seg-eval can read them back with --masks.
+// numpy's median (the mean of the two middle values for an even count); 0 for none.
 double Median(std::vector<double> values) {
   if (values.empty()) return 0;
-  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2), values.end());
-  return values[values.size() / 2];
+  std::sort(values.begin(), values.end());
+  const std::size_t n = values.size();
+  return n % 2 == 1 ? values[n / 2] : (values[n / 2 - 1] + values[n / 2]) / 2;
 }
 
 // A map reset voids the poses of the frames before it: they are in the frame of a map
@@ -210,9 +213,7 @@ double SlamRunResult::LocalizedShare() const {
 double SlamRunResult::MedianTrackingMs() const {
   std::vector<double> times;
   for (const auto& frame : frames) times.push_back(frame.timings.TrackingMs());
-  if (times.empty()) return 0;
-  std::nth_element(times.begin(), times.begin() + times.size() / 2, times.end());
-  return times[times.size() / 2];
+  return Median(std::move(times));
 }
 
 SlamRunResult RunSlamOnSequence(const TumSequence& sequence, const SlamRunOptions& options) {

@@ -134,8 +134,13 @@ std::string WithSpread(const nlohmann::json& results, const std::string& pass, c
                        const std::string& metric, const char* format, double scale = 1) {
   const double median = Median(results, pass, mode, metric);
   const double low = Median(results, pass, mode, metric, "min"), high = Median(results, pass, mode, metric, "max");
-  if (std::isnan(median) || low == high) return Cell(median, format, scale);
-  return Cell(median, format, scale) + " [" + Cell(low, format, scale) + ", " + Cell(high, format, scale) + "]";
+  std::string text = Cell(median, format, scale);
+  if (std::isnan(median)) return text;
+  if (low != high) text += " [" + Cell(low, format, scale) + ", " + Cell(high, format, scale) + "]";
+  // Runs without a value are named, as in the scenario report.
+  const double count = Median(results, pass, mode, metric, "count"), runs = Median(results, pass, mode, metric, "runs");
+  if (count < runs) text += fmt::format(" ({:.0f} of {:.0f} runs)", count, runs);
+  return text;
 }
 
 // The paper's tables over the suite's entries, each entry in the tables it asked for:
@@ -150,7 +155,10 @@ SuiteTables MakeSuiteTables(const Suite& suite, const std::vector<nlohmann::json
   const std::vector<std::string> modes = ModesThatRan(results);
   const bool ratio = std::count(modes.begin(), modes.end(), "plain") && std::count(modes.begin(), modes.end(), "mutual");
   SuiteTables tables{
-      {"ATE RMSE [m], pass 1, aligned to the ground truth", {"sequence"}, {}},
+      {"ATE RMSE [m], pass 1, aligned to the ground truth; a mode localized on fewer than all frames says its share "
+       "(ATE covers those only)",
+       {"sequence"},
+       {}},
       {"Raw vs refined masks of the mutual loop (SLAM poses) [%]",
        {"sequence", "raw mAP", "raw AP50", "raw mIoU", "refined mAP", "refined AP50", "refined mIoU"}, {}},
       {"Pass 2 on pass 1's long-term map, not re-aligned: localized share and ATE RMSE [m]", {"route"}, {}}};
@@ -169,7 +177,12 @@ SuiteTables MakeSuiteTables(const Suite& suite, const std::vector<nlohmann::json
     const nlohmann::json& r = results[i];
     if (entry.tables.count("ate")) {
       std::vector<std::string> row = {entry.name};
-      for (const std::string& mode : modes) row.push_back(WithSpread(r, "pass1", mode, "ate_rmse_m", "{:.4f}"));
+      for (const std::string& mode : modes) {
+        std::string cell = WithSpread(r, "pass1", mode, "ate_rmse_m", "{:.4f}");
+        const double localized = Median(r, "pass1", mode, "localized_share");
+        if (localized < 1) cell += " (" + Cell(localized, "{:.1f}% localized", 100) + ")";
+        row.push_back(cell);
+      }
       if (ratio) {
         row.push_back(Cell(Median(r, "pass1", "mutual", "ate_rmse_m") / Median(r, "pass1", "plain", "ate_rmse_m"), "{:.2f}"));
       }

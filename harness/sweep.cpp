@@ -42,9 +42,10 @@ std::vector<std::string> SplitValues(const std::string& text) {
 
 
 // The median, min and max of one metric of one mode and pass in a point's results.json;
-// NaN where the point has no value.
+// NaN where the point has no value. `count` of its `runs` had a value.
 struct PointValue {
   double median = kNaN, min = kNaN, max = kNaN;
+  int count = 0, runs = 0;
 };
 
 double NumberOrNaN(const nlohmann::json& json, const char* key) {
@@ -57,17 +58,21 @@ PointValue ValueOf(const nlohmann::json& results, const std::string& pass, const
   const nlohmann::json& summary = results["summary"];
   if (!summary.contains(pass) || !summary[pass].contains(mode) || !summary[pass][mode].contains(metric)) return {};
   const nlohmann::json& s = summary[pass][mode][metric];
-  return {NumberOrNaN(s, "median"), NumberOrNaN(s, "min"), NumberOrNaN(s, "max")};
+  return {NumberOrNaN(s, "median"), NumberOrNaN(s, "min"), NumberOrNaN(s, "max"), s.value("count", 0),
+          s.value("runs", 0)};
 }
 
 std::string Cell(double value, const char* format) {
   return std::isnan(value) ? std::string("n/a") : fmt::format(fmt::runtime(format), value);
 }
 
+// Runs without a value are named, as in the scenario report: "0.0123 (2 of 3 runs)".
 std::string Spread(const PointValue& v, const char* format) {
   if (std::isnan(v.median)) return "n/a";
-  if (v.min == v.max) return Cell(v.median, format);
-  return Cell(v.median, format) + " [" + Cell(v.min, format) + ", " + Cell(v.max, format) + "]";
+  std::string text = Cell(v.median, format);
+  if (v.min != v.max) text += " [" + Cell(v.min, format) + ", " + Cell(v.max, format) + "]";
+  if (v.count < v.runs) text += fmt::format(" ({} of {} runs)", v.count, v.runs);
+  return text;
 }
 
 std::string Join(const std::vector<std::string>& parts, const std::string& separator) {
@@ -372,6 +377,8 @@ ReportTable SweepTable(const SweepGrid& grid, const std::vector<nlohmann::json>&
   for (const SweepAxis& axis : grid.axes) table.header.push_back(axis.key);
   for (const std::string& mode : contents.modes) {
     table.header.push_back(mode + " ATE p1 [m]");
+    // ATE covers the localized frames only: where a mode breaks, this says how much.
+    table.header.push_back(mode + " localized p1");
     if (two_pass) {
       table.header.push_back(mode + " ATE p2 [m]");
       table.header.push_back(mode + " localized p2");
@@ -392,6 +399,7 @@ ReportTable SweepTable(const SweepGrid& grid, const std::vector<nlohmann::json>&
     for (const std::string& assignment : grid.PointAssignments(p)) row.push_back(assignment.substr(assignment.find('=') + 1));
     for (const std::string& mode : contents.modes) {
       row.push_back(Spread(ValueOf(r, "pass1", mode, "ate_rmse_m"), "{:.4f}"));
+      row.push_back(Cell(100 * ValueOf(r, "pass1", mode, "localized_share").median, "{:.1f}%"));
       if (two_pass) {
         row.push_back(Spread(ValueOf(r, "pass2", mode, "ate_rmse_m"), "{:.4f}"));
         row.push_back(Cell(100 * ValueOf(r, "pass2", mode, "localized_share").median, "{:.1f}%"));

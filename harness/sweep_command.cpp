@@ -8,6 +8,7 @@
 #include <memory>
 
 #include <fmt/format.h>
+#include <yaml-cpp/yaml.h>
 #include <nlohmann/json.hpp>
 
 #include "core/atomic_file.h"
@@ -99,8 +100,8 @@ void ClaimSweepFolder(const fs::path& out_dir, const nlohmann::json& sweep) {
     if (existing.value("grid", nlohmann::json()) != sweep["grid"] ||
         existing.value("settings", nlohmann::json()) != sweep["settings"]) {
       throw Error("sweep: " + out_dir.string() +
-                  " holds another sweep (sweep.json differs: grid, scenario, --frames, --modes, --repeats, "
-                  "--segmenter or --set); choose another --out");
+                  " holds another sweep (sweep.json differs: grid, scenario file or its content, --frames, --modes, "
+                  "--repeats, --segmenter or --set); choose another --out");
     }
   }
   WriteFileAtomically(sweep_file, sweep.dump(2) + "\n");
@@ -146,7 +147,12 @@ int RunSweep(const SweepArgs& args) {
   const fs::path out_dir = args.out_dir.empty() ? fs::path("reports") / default_name : fs::path(args.out_dir);
   // What every point's results depend on besides the grid: a folder (or a shard to merge)
   // made with other settings holds another sweep.
-  const nlohmann::json settings = {{"scenario_file", run.scenario_file}, {"frames", run.frames},
+  // The scenario's content, not only its path: a file edited between two runs into one
+  // folder is another sweep.
+  YAML::Emitter scenario_yaml;
+  scenario_yaml << scenes::ScenarioToYaml(base);
+  const nlohmann::json settings = {{"scenario_file", run.scenario_file}, {"scenario", scenario_yaml.c_str()},
+                                   {"frames", run.frames},
                                    {"modes", run.modes},                 {"repeats", run.repeats},
                                    {"segmenter", run.segmenter},         {"overrides", run.overrides}};
   nlohmann::json sweep = {{"scenario_file", run.scenario_file}, {"grid", grid.ToJson()}, {"settings", settings}};

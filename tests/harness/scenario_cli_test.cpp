@@ -58,6 +58,26 @@ TEST_F(ScenarioCliTest, UnknownMetricFailsBeforeAnyWork) {
   EXPECT_FALSE(fs::exists(dir_ / "cache"));
 }
 
+// A run replaces the report in its --out folder; a folder of other files is no report
+// and is refused before any work, its files kept.
+TEST_F(ScenarioCliTest, OutFolderOfOtherFilesIsRefusedAndKept) {
+  const fs::path victim = dir_ / "victim";
+  fs::create_directories(victim / "runs");
+  fs::create_directories(victim / "figures");
+  std::ofstream(victim / "runs" / "important.txt") << "keep me\n";
+  std::ofstream(victim / "figures" / "plot.png") << "not a segslam figure\n";
+  const CommandOutput result = Run("scenario run " + kSmallOffice.string() + " --cache " + (dir_ / "cache").string() +
+                                   " --out " + victim.string() + " -q");
+  EXPECT_EQ(result.exit_code, 1);
+  EXPECT_EQ(LineCount(result.stderr_text), 1) << result.stderr_text;
+  EXPECT_NE(result.stderr_text.find(victim.string() + ": holds other files and no segslam scenario report"),
+            std::string::npos)
+      << result.stderr_text;
+  EXPECT_EQ(ReadText(victim / "runs" / "important.txt"), "keep me\n");
+  EXPECT_TRUE(fs::exists(victim / "figures" / "plot.png"));
+  EXPECT_FALSE(fs::exists(dir_ / "cache"));
+}
+
 TEST_F(ScenarioCliTest, TinyRunWritesTheReportAndItsExitCodeFollowsTheThresholds) {
   const std::string cache = (dir_ / "cache").string();
   const std::string common = " --frames 25 --repeats 2 --modes plain,mutual -q --cache " + cache;
@@ -149,6 +169,17 @@ TEST_F(ScenarioCliTest, TinyRunWritesTheReportAndItsExitCodeFollowsTheThresholds
   EXPECT_NE(narrowed.stdout_text.find("figure not drawn: figures/features_kept_vs_dropped.png"), std::string::npos)
       << narrowed.stdout_text;
   EXPECT_EQ(ReadText(dir_ / "report3" / "report.md").find("features_kept_vs_dropped"), std::string::npos);
+
+  // --modes leaving every threshold out checked nothing: not a pass, and JUnit says so.
+  const fs::path skipped_junit = dir_ / "skipped.xml";
+  const CommandOutput none = Run("scenario run " + failing.string() + " --frames 25 --modes mask-moveable -q --cache " +
+                                 cache + " --out " + (dir_ / "report4").string() + " --junit " + skipped_junit.string());
+  EXPECT_EQ(none.exit_code, 2) << none.stdout_text << none.stderr_text;
+  EXPECT_NE(none.stdout_text.find("0 of 0 expectations passed, 2 not checked"), std::string::npos) << none.stdout_text;
+  EXPECT_NE(none.stdout_text.find("no expectation was checked"), std::string::npos) << none.stdout_text;
+  const std::string skipped_xml = ReadText(skipped_junit);
+  EXPECT_EQ(Count(skipped_xml, "<skipped "), 2) << skipped_xml;
+  EXPECT_EQ(nlohmann::json::parse(ReadText(dir_ / "report4" / "results.json"))["passed"], false);
 
   // Beside the dataset, a record of the build that generated it. prune-cache keeps this
   // build's dataset and removes another build's (listing it first with --dry-run).

@@ -108,6 +108,19 @@ void RequireDataset(const fs::path& dir) {
 }
 
 // Static scenes: ATE below 1 cm indoors and below 0.3% of the route outdoors.
+// The median tracking time is numpy's: an even count averages the two middle frames.
+TEST(SlamRunResultTest, MedianTrackingTimeAveragesTheMiddleTwo) {
+  SlamRunResult result;
+  for (double ms : {4.0, 1.0, 3.0, 2.0}) {
+    slam::FrameResult frame;
+    frame.timings.features_ms = ms;
+    result.frames.push_back(frame);
+  }
+  EXPECT_DOUBLE_EQ(result.MedianTrackingMs(), 2.5);
+  result.frames.pop_back();
+  EXPECT_DOUBLE_EQ(result.MedianTrackingMs(), 3.0);
+}
+
 TEST(SlamRunTest, StaticOfficeTracksWithinOneCentimetre) {
   const fs::path dir = kDataDir / "office_static" / "pass1";
   RequireDataset(dir);

@@ -293,6 +293,22 @@ TEST_F(SweepCliTest, ShardsMergedEqualOneRun) {
                                   (dir_ / "other_settings").string() + " --out " + (dir_ / "mixed").string());
   EXPECT_EQ(mixed.exit_code, 1);
   EXPECT_NE(mixed.stderr_text.find("was run with other settings"), std::string::npos) << mixed.stderr_text;
+
+  // A scenario file edited since its sweep ran: the same path, the same options, another
+  // world; its folder's points are not kept as this sweep's.
+  const fs::path copy = dir_ / "office_small_copy.yaml";
+  fs::copy_file(kSmallOffice, copy);
+  const std::string common_on_copy = copy.string() + common.substr(kSmallOffice.size());
+  const CommandOutput on_copy = Run("sweep " + common_on_copy + " --out " + (dir_ / "edited").string() + " --shard 1/2");
+  ASSERT_EQ(on_copy.exit_code, 0) << on_copy.stderr_text;
+  std::string text = ReadText(copy);
+  const std::size_t seed = text.find("seed: 5");
+  ASSERT_NE(seed, std::string::npos);
+  text.replace(seed, 7, "seed: 6");
+  std::ofstream(copy) << text;
+  const CommandOutput edited = Run("sweep " + common_on_copy + " --out " + (dir_ / "edited").string() + " --shard 1/2");
+  EXPECT_EQ(edited.exit_code, 1);
+  EXPECT_NE(edited.stderr_text.find("holds another sweep"), std::string::npos) << edited.stderr_text;
 }
 
 // A sweep file over the simulated segmenter's error strength: strength 0 is the ground
