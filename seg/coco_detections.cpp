@@ -26,6 +26,7 @@ std::string IdText(const nlohmann::json& id) {
 struct ImageList {
   std::string origin;                                  // the file they came from
   std::unordered_map<std::string, std::string> stem_of;  // image id (IdText) -> file stem
+  std::unordered_map<std::string, cv::Size> size_of;     // image id -> width, height, where listed
   std::optional<std::map<long long, std::string>> category_names;  // id -> name, if listed
 };
 
@@ -45,6 +46,13 @@ ImageList ReadImageList(const nlohmann::json& json, const std::string& origin) {
     const std::string stem = fs::path(image.at("file_name").get<std::string>()).stem().string();
     if (!list.stem_of.emplace(IdText(image.at("id")), stem).second) {
       throw Error(fmt::format("{}: images[{}]: id {} appears twice", origin, k, IdText(image.at("id"))));
+    }
+    if (image.contains("width") || image.contains("height")) {
+      if (!image.contains("width") || !image.contains("height") || !image.at("width").is_number_integer() ||
+          !image.at("height").is_number_integer()) {
+        throw Error(fmt::format("{}: images[{}]: \"width\" and \"height\" must both be integers", origin, k));
+      }
+      list.size_of[IdText(image.at("id"))] = cv::Size(image.at("width").get<int>(), image.at("height").get<int>());
     }
   }
   if (json.contains("categories")) {
@@ -129,9 +137,15 @@ CocoDetections CocoDetections::Read(const fs::path& file, const TumSequence& seq
       throw Error(fmt::format("{}: detection {}: image_id is neither an integer nor a string", origin, k));
     }
     const std::string where = fmt::format("{}: detection {} (image_id {})", origin, k, IdText(image_id));
-    if (entry.contains("iscrowd") && entry.at("iscrowd").is_number_integer() && entry.at("iscrowd").get<int>() != 0) {
-      ++counts.crowd;
-      continue;
+    if (entry.contains("iscrowd")) {
+      const nlohmann::json& crowd = entry.at("iscrowd");
+      if (!crowd.is_boolean() && !crowd.is_number_integer()) {
+        throw Error(where + ": iscrowd is neither 0/1 nor true/false");
+      }
+      if (crowd.is_boolean() ? crowd.get<bool>() : crowd.get<long long>() != 0) {
+        ++counts.crowd;
+        continue;
+      }
     }
 
     std::string stem;
@@ -155,6 +169,16 @@ CocoDetections CocoDetections::Read(const fs::path& file, const TumSequence& seq
     if (frame == frame_of_stem.end()) {
       ++counts.other_images;
       continue;
+    }
+    // Polygons and RLE are in the listed image's pixels: another size is another image.
+    if (images.has_value()) {
+      const auto size = images->size_of.find(IdText(image_id));
+      if (size != images->size_of.end() && size->second != result.image_size_) {
+        throw Error(fmt::format("{}: the image list of {} gives its image {}x{}, but the sequence's frames are "
+                                "{}x{}",
+                                where, images->origin, size->second.width, size->second.height,
+                                result.image_size_.width, result.image_size_.height));
+      }
     }
 
     if (!entry.at("category_id").is_number_integer()) throw Error(where + ": category_id is not an integer");

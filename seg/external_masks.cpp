@@ -149,10 +149,11 @@ void WriteExternalMaskFiles(const fs::path& dir, const std::string& stem, const 
   WriteFileAtomically(dir / (stem + ".json"), table.dump() + "\n");
 }
 
-ExternalMaskSegmenter::ExternalMaskSegmenter(const fs::path& dir, const TumSequence& sequence)
+ExternalMaskSegmenter::ExternalMaskSegmenter(const fs::path& dir, const TumSequence& sequence, size_t frames)
     : dir_(dir), sequence_(sequence) {
   if (!fs::is_directory(dir_)) throw FileError(dir_, "external masks folder does not exist");
-  for (size_t i = 0; i < sequence_.size(); ++i) {
+  const size_t checked = frames > 0 ? std::min(frames, sequence_.size()) : sequence_.size();
+  for (size_t i = 0; i < checked; ++i) {
     for (const fs::path& path : {MaskPath(i), TablePath(i)}) {
       if (!fs::is_regular_file(path)) {
         throw FileError(path, fmt::format("missing external mask file for frame {} ({}): every "

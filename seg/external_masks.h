@@ -59,9 +59,11 @@ void WriteExternalMaskFiles(const std::filesystem::path& dir, const std::string&
 class ExternalMaskSegmenter : public Segmenter {
  public:
   // Checks that `dir` is a folder and holds <stem>.png and <stem>.json for every frame of
-  // `sequence`; throws segslam::Error naming the first missing file (a folder that skips
-  // frames) otherwise. The files' contents are checked frame by frame in Segment().
-  ExternalMaskSegmenter(const std::filesystem::path& dir, const TumSequence& sequence);
+  // `sequence`, or for its first `frames` when that is above 0 (a run cut with --frames,
+  // fed the masks of an earlier cut run); throws segslam::Error naming the first missing
+  // file (a folder that skips frames) otherwise. The files' contents are checked frame by
+  // frame in Segment().
+  ExternalMaskSegmenter(const std::filesystem::path& dir, const TumSequence& sequence, size_t frames = 0);
   ExternalMaskSegmenter(const ExternalMaskSegmenter&) = delete;
   ExternalMaskSegmenter& operator=(const ExternalMaskSegmenter&) = delete;
 

@@ -396,6 +396,11 @@ void ProjectInto(const RefinerOptions& options, const PinholeCamera& camera,
                  const cv::Mat& current_depth_m, ProjectionWorkspace* ws) {
   CheckInputImage(previous_depth_m, CV_32F, camera, "previous depth");
   if (!current_depth_m.empty()) CheckInputImage(current_depth_m, CV_32F, camera, "current depth");
+  // Every input is checked before the workspace is touched: an error half-way would leave
+  // splatted labels behind for the next frame.
+  for (const InstanceMask& instance : previous_refined.instances) {
+    CheckInputImage(instance.mask, CV_8U, camera, "previous instance mask");
+  }
   const size_t n = previous_refined.instances.size();
   ResetWorkspace(camera.width, camera.height, n, ws);
   if (n == 0) return;
@@ -404,7 +409,6 @@ void ProjectInto(const RefinerOptions& options, const PinholeCamera& camera,
   cv::Rect all_touched;
   for (size_t i = 0; i < n; ++i) {
     const InstanceMask& instance = previous_refined.instances[i];
-    CheckInputImage(instance.mask, CV_8U, camera, "previous instance mask");
     const RegionStats stats = Measure(instance.mask);
     if (stats.area_px == 0) continue;
     const auto motion = instance_motion_prev.find(instance.track_id);
@@ -732,6 +736,9 @@ RefinementResult SegmentationRefiner::Refine(const RefinerInput& in) {
   std::string error;
   if (!in.camera.IsValid(&error)) throw Error("refiner camera: " + error);
   const FrameSegmentation& current = in.current_initial;
+  for (const InstanceMask& instance : current.instances) {
+    CheckInputImage(instance.mask, CV_8U, in.camera, "current instance mask");
+  }
   // Ids handed out elsewhere (a loaded previous segmentation) are never reused.
   if (in.previous_refined) ReserveIdsOf(*in.previous_refined);
   // First frame (or no depth to project with): every region is new.
@@ -745,10 +752,7 @@ RefinementResult SegmentationRefiner::Refine(const RefinerInput& in) {
 
   const size_t n_cur = current.instances.size();
   std::vector<RegionStats> cur_stats(n_cur);
-  for (size_t c = 0; c < n_cur; ++c) {
-    CheckInputImage(current.instances[c].mask, CV_8U, in.camera, "current instance mask");
-    cur_stats[c] = Measure(current.instances[c].mask);
-  }
+  for (size_t c = 0; c < n_cur; ++c) cur_stats[c] = Measure(current.instances[c].mask);
   const std::vector<std::optional<RegionMatch>> match_of_cur =
       MatchRegions(options_, in.camera, previous, ws, current, cur_stats);
 

@@ -38,32 +38,33 @@ std::uint16_t DominantGroundTruthId(const cv::Mat& region, const cv::Mat& gt_ids
   return best;
 }
 
-// The ground-truth tracks by instance id.
-using TrackIndex = std::map<std::uint16_t, const ObjectTrack*>;
+// The sample of frame `frame` in a track (ordered by frame, possibly sparse), or null.
+const TrackSample* SampleAt(const ObjectTrack& track, int frame) {
+  const auto it = std::lower_bound(track.samples.begin(), track.samples.end(), frame,
+                                   [](const TrackSample& sample, int f) { return sample.frame < f; });
+  return it != track.samples.end() && it->frame == frame ? &*it : nullptr;
+}
 
-// The motion from frame i-1 to frame i of each previous region whose ground-truth object
-// moves, as the refiner projects it: T_cur_prev = T_cw(t) T_wo(t) T_ow(t-1) T_wc(t-1),
-// with every pose the true one. A region is the object it overlaps most in previous_gt.
+}  // namespace
+
 std::map<std::uint16_t, Eigen::Isometry3d> GroundTruthRegionMotions(const FrameSegmentation& previous_refined,
                                                                     const cv::Mat& previous_gt,
-                                                                    const TrackIndex& track_of, size_t i,
+                                                                    const TrackIndex& track_of, int frame,
                                                                     const Eigen::Isometry3d& T_wc_previous,
                                                                     const Eigen::Isometry3d& T_wc_current) {
   std::map<std::uint16_t, Eigen::Isometry3d> motions;
   for (const auto& region : previous_refined.instances) {
     const std::uint16_t gt_id = DominantGroundTruthId(region.mask, previous_gt);
     const auto it = track_of.find(gt_id);
-    if (gt_id == 0 || it == track_of.end() || it->second->samples.size() <= i) continue;
-    const TrackSample& before = it->second->samples[i - 1];
-    const TrackSample& now = it->second->samples[i];
-    if (!before.present || !now.present || !before.moving) continue;
+    if (gt_id == 0 || it == track_of.end()) continue;
+    const TrackSample* before = SampleAt(*it->second, frame - 1);
+    const TrackSample* now = SampleAt(*it->second, frame);
+    if (before == nullptr || now == nullptr || !before->present || !now->present) continue;
     motions[region.track_id] =
-        T_wc_current.inverse() * now.T_world_object * before.T_world_object.inverse() * T_wc_previous;
+        T_wc_current.inverse() * now->T_world_object * before->T_world_object.inverse() * T_wc_previous;
   }
   return motions;
 }
-
-}  // namespace
 
 SequenceSegEval EvaluateSequenceWithGroundTruthPoses(const SegEvalOptions& options,
                                                       const fs::path& dir,
@@ -94,7 +95,7 @@ SequenceSegEval EvaluateSequenceWithGroundTruthPoses(const SegEvalOptions& optio
   }
 
   SegmentationRefiner refiner(options.refiner);
-  SegmentationEvaluator raw_scores, refined_scores;
+  SegmentationEvaluator raw_scores, refined_scores, raw_confident_scores;
   const PinholeCamera& camera = sequence.camera().intrinsics;
   std::vector<double> refine_ms;
   SequenceSegEval result;
@@ -123,7 +124,7 @@ SequenceSegEval EvaluateSequenceWithGroundTruthPoses(const SegEvalOptions& optio
     input.camera = camera;
     // Moving objects are projected with their own ground-truth motion.
     if (previous_refined && track_of) {
-      input.instance_motion_prev = GroundTruthRegionMotions(*previous_refined, previous_gt, *track_of, i,
+      input.instance_motion_prev = GroundTruthRegionMotions(*previous_refined, previous_gt, *track_of, static_cast<int>(i),
                                                             input.T_wc_previous_fine, input.T_wc_current_coarse);
     }
     const auto refine_start = std::chrono::steady_clock::now();
@@ -135,6 +136,13 @@ SequenceSegEval EvaluateSequenceWithGroundTruthPoses(const SegEvalOptions& optio
     }
 
     raw_scores.AddFrame(gt_ids, instances, initial);
+    FrameSegmentation confident = initial;
+    confident.instances.erase(std::remove_if(confident.instances.begin(), confident.instances.end(),
+                                             [&](const InstanceMask& m) {
+                                               return m.score < options.refiner.min_new_region_score;
+                                             }),
+                              confident.instances.end());
+    raw_confident_scores.AddFrame(gt_ids, instances, confident);
     refined_scores.AddFrame(gt_ids, instances, refinement.refined);
     previous_refined = refinement.refined;
     previous_depth = frame.depth_m;
@@ -147,8 +155,11 @@ SequenceSegEval EvaluateSequenceWithGroundTruthPoses(const SegEvalOptions& optio
   result.frames = static_cast<int>(sequence.size());
   result.raw = raw_scores.Scores();
   result.refined = refined_scores.Scores();
+  result.raw_confident = raw_confident_scores.Scores();
+  result.raw_confident_min_score = options.refiner.min_new_region_score;
   std::sort(refine_ms.begin(), refine_ms.end());
-  result.refine_ms_median = refine_ms.empty() ? 0 : refine_ms[refine_ms.size() / 2];
+  const size_t n = refine_ms.size();
+  result.refine_ms_median = n == 0 ? 0 : n % 2 == 1 ? refine_ms[n / 2] : (refine_ms[n / 2 - 1] + refine_ms[n / 2]) / 2;
   result.last_color_bgr = frame.color_bgr;
   result.last_gt_ids = gt_ids;
   result.last_initial = std::move(initial);

@@ -7,11 +7,16 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <string>
 
+#include <Eigen/Geometry>
 #include <opencv2/core.hpp>
+
+#include "core/tracks.h"
 
 #include "seg/metrics.h"
 #include "seg/refiner.h"
@@ -35,6 +40,11 @@ struct SequenceSegEval {
   int frames = 0;
   SegmentationScores raw;      // the segmenter's instances
   SegmentationScores refined;  // after the refinement
+  // The segmenter's instances scoring at least the refiner's min_new_region_score: the
+  // refinement drops new regions under it, so this is the baseline without the refiner's
+  // use of the previous frame (what a plain score threshold alone gives).
+  SegmentationScores raw_confident;
+  double raw_confident_min_score = 0;
   double refine_ms_median = 0;
   // RegionDecision kinds summed over the sequence, indexed by RegionDecision::Kind.
   std::array<int, 5> decision_counts{};
@@ -52,5 +62,19 @@ struct SequenceSegEval {
 SequenceSegEval EvaluateSequenceWithGroundTruthPoses(const SegEvalOptions& options,
                                                       const std::filesystem::path& sequence_dir,
                                                       Segmenter& segmenter);
+
+// The ground-truth tracks by instance id.
+using TrackIndex = std::map<std::uint16_t, const ObjectTrack*>;
+
+// The motion from frame `frame` - 1 to `frame` of each previous region's ground-truth
+// object, by the region's track id, as the refiner projects it: T_cur_prev = T_cw(t)
+// T_wo(t) T_ow(t-1) T_wc(t-1), with every pose the true one (for an object that stands
+// still, the camera's motion alone). A region is the object it overlaps most in
+// previous_gt; a region over no object, or over one absent from either frame, has none.
+std::map<std::uint16_t, Eigen::Isometry3d> GroundTruthRegionMotions(const FrameSegmentation& previous_refined,
+                                                                    const cv::Mat& previous_gt,
+                                                                    const TrackIndex& track_of, int frame,
+                                                                    const Eigen::Isometry3d& T_wc_previous,
+                                                                    const Eigen::Isometry3d& T_wc_current);
 
 }  // namespace segslam::seg

@@ -164,6 +164,24 @@ TEST_F(CocoDetectionsTest, DatasetFileWithItsOwnImages) {
       {"categories", json::array({{{"id", 1}, {"name", "person"}}, {{"id", 3}, {"name", "car"}}})}};
   const CocoDetections detections = CocoDetections::Read(Write("dataset.json", dataset), sequence_, {});
   EXPECT_EQ(detections.counts().crowd, 1);
+  // iscrowd as a JSON boolean is a crowd region as well.
+  json boolean_crowd = dataset;
+  boolean_crowd["annotations"][1]["iscrowd"] = true;
+  boolean_crowd["annotations"][0]["iscrowd"] = false;
+  EXPECT_EQ(CocoDetections::Read(Write("boolean.json", boolean_crowd), sequence_, {}).counts().crowd, 1);
+  boolean_crowd["annotations"][1]["iscrowd"] = "yes";
+  EXPECT_NE(ReadError(Write("odd_crowd.json", boolean_crowd)).find("iscrowd is neither 0/1 nor true/false"),
+            std::string::npos);
+  // Polygons of a listed image of another size belong to another image.
+  json listed_size = dataset;
+  listed_size["images"][0]["width"] = 2 * kWidth;
+  listed_size["images"][0]["height"] = 2 * kHeight;
+  EXPECT_NE(ReadError(Write("listed_size.json", listed_size)).find("gives its image 80x60, but the sequence's frames "
+                                                                   "are 40x30"),
+            std::string::npos);
+  listed_size["images"][0]["width"] = kWidth;
+  listed_size["images"][0]["height"] = kHeight;
+  EXPECT_EQ(CocoDetections::Read(Write("listed_size.json", listed_size), sequence_, {}).Frame(0).instances.size(), 1u);
   const FrameSegmentation frame0 = detections.Frame(0);
   ASSERT_EQ(frame0.instances.size(), 1u);
   EXPECT_EQ(frame0.instances[0].category_id, 3);

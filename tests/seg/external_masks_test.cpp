@@ -125,6 +125,17 @@ TEST_F(ExternalMasksTest, FolderThatSkipsAFrame) {
   EXPECT_THROW(ExternalMaskSegmenter(root_ / "nowhere", sequence_), Error);
 }
 
+// A run cut with --frames N writes masks for its N frames; a run cut the same way reads
+// them back, and a longer one is refused naming the first frame without its files.
+TEST_F(ExternalMasksTest, FolderOfTheFirstFramesServesARunOfThoseFrames) {
+  fs::remove(masks_ / (Stem(2) + ".png"));
+  fs::remove(masks_ / (Stem(2) + ".json"));
+  ExternalMaskSegmenter first_two(masks_, sequence_, 2);
+  EXPECT_EQ(first_two.Segment(sequence_.LoadFrame(1)).instances.size(), 2u);
+  EXPECT_THROW(ExternalMaskSegmenter(masks_, sequence_, 3), Error);
+  EXPECT_THROW(ExternalMaskSegmenter(masks_, sequence_), Error);
+}
+
 TEST_F(ExternalMasksTest, WrongSize) {
   WriteInstanceMask(masks_ / (Stem(0) + ".png"), cv::Mat(20, 30, CV_16U, cv::Scalar(0)));
   const std::string message = SegmentError(0);

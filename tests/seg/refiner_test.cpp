@@ -549,5 +549,44 @@ TEST(SegmentationRefinerTest, RejectsWrongImageSizes) {
   EXPECT_THROW(refiner.Refine(in), Error);
 }
 
+// A wrong-sized mask is refused before any work, on the first frame too, and leaves the
+// refiner as it was: the next frame is refined as by a refiner that never saw it.
+TEST(SegmentationRefinerTest, WrongSizedMaskLeavesTheRefinerAsItWas) {
+  const Scene scene;
+  const cv::Mat small(240, 320, CV_8U, cv::Scalar(1));
+  FrameSegmentation broken_previous;
+  broken_previous.instances.push_back(Instance(5, 1, RectMask(scene.person_a)));
+  broken_previous.instances.push_back(Instance(6, 1, small));
+  RefinerInput broken = scene.Input(FrameSegmentation());
+  broken.previous_refined = &broken_previous;
+  SegmentationRefiner used;
+  EXPECT_THROW(used.Refine(broken), Error);
+
+  FrameSegmentation first_frame;
+  first_frame.instances.push_back(Instance(1, 1, small));
+  RefinerInput first = scene.Input(first_frame);
+  first.previous_refined = nullptr;
+  EXPECT_THROW(used.Refine(first), Error);
+
+  // The next frame's previous regions lie elsewhere, then where the refused one's first
+  // region was.
+  FrameSegmentation previous;
+  previous.instances.push_back(Instance(7, 62, RectMask(scene.chair)));
+  previous.instances.push_back(Instance(9, 1, RectMask(scene.person_a)));
+  FrameSegmentation current;
+  current.instances.push_back(Instance(1, 1, RectMask(scene.person_a)));
+  RefinerInput next = scene.Input(current);
+  next.previous_refined = &previous;
+  SegmentationRefiner fresh;
+  const RefinementResult expected = fresh.Refine(next);
+  const RefinementResult actual = used.Refine(next);
+  ASSERT_EQ(actual.decisions.size(), expected.decisions.size());
+  for (size_t i = 0; i < expected.decisions.size(); ++i) {
+    EXPECT_EQ(actual.decisions[i].kind, expected.decisions[i].kind) << "decision " << i;
+    EXPECT_EQ(actual.decisions[i].projected_area_px, expected.decisions[i].projected_area_px) << "decision " << i;
+  }
+  ASSERT_GT(expected.decisions[0].projected_area_px, 0);
+}
+
 }  // namespace
 }  // namespace segslam::seg
