@@ -203,7 +203,9 @@ class OfficeBuilder {
                               Vec3(0.025, 0.025, (kDeskHeightM - 0.03) / 2), metal_));
         }
       }
-      g.push_back(MakeBox(Vec3(s.half.x() - 0.05, 0, 0.45), Vec3(0.01, s.half.y() - 0.06, 0.25), wood_));
+      // A modesty panel on the wall desks, on the wall side; the main desk has none, as
+      // its sitters' legs go under it from the back (+x).
+      if (d > 0) g.push_back(MakeBox(Vec3(s.half.x() - 0.05, 0, 0.45), Vec3(0.01, s.half.y() - 0.06, 0.25), wood_));
       // Monitors at the back edge facing the front (the main desk: at both ends, so
       // the people behind stay visible), a keyboard and a mouse in front of each.
       const std::vector<double> ys = d == 0 ? std::vector<double>{-0.72, 0.72} : std::vector<double>{0.0};
@@ -498,11 +500,12 @@ class OfficeBuilder {
     }
   }
 
-  // A narrow loop from the front leg to half a metre short of the desk, 2.2 m wide: the
-  // leader starts near the middle of the front leg, so the pair is in the first frames
-  // (and in the first map) as in TUM's sequences; the others follow spacing_m apart.
+  // A narrow loop from the front leg to 0.65 m short of the desk, 2.2 m wide and at most
+  // 0.6 m deep (the scenario checks that a pair has all of it): the leader starts near
+  // the middle of the front leg, so the pair is in the first frames (and in the first
+  // map) as in TUM's sequences; the others follow spacing_m apart.
   void MakeWalkersInFront(std::mt19937_64& rng, double front) {
-    const double far = std::max(front + 0.2, std::min(front + 0.5, desk_.x() - 0.65)), half_width = 1.1;
+    const double far = std::max(front + 0.2, std::min(front + 0.6, desk_.x() - 0.65)), half_width = 1.1;
     PathMotion loop;
     loop.waypoints = {Vec3(front, half_width, 0), Vec3(front, -half_width, 0), Vec3(far, -half_width, 0),
                       Vec3(far, half_width, 0)};

@@ -3,7 +3,9 @@
 #include "scenes/person.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 
 namespace segslam::scenes {
 namespace {
@@ -19,6 +21,19 @@ struct Body {
   double thigh_r = 0.075, shank_r = 0.055, upper_arm_r = 0.045, forearm_r = 0.038;
 };
 const Body kBody;
+
+// The shoe: a box on the shank's lower end, toes forward (+x), in the shank's frame.
+const Eigen::Vector3d kShoeHalfSize(0.125, 0.05, 0.04);
+Eigen::Vector3d ShoeCentre() { return Eigen::Vector3d(0.05, 0, -kBody.shank - 0.005); }
+
+std::array<Eigen::Vector3d, 8> ShoeCorners(double s) {
+  std::array<Eigen::Vector3d, 8> corners;
+  for (int k = 0; k < 8; ++k) {
+    const Eigen::Vector3d sign(k & 1 ? 1 : -1, k & 2 ? 1 : -1, k & 4 ? 1 : -1);
+    corners[static_cast<size_t>(k)] = (ShoeCentre() + sign.cwiseProduct(kShoeHalfSize)) * s;
+  }
+  return corners;
+}
 
 Geom MakeGeom(Shape shape, Eigen::Vector3d size, Eigen::Vector3d at, int material) {
   Geom g;
@@ -96,8 +111,7 @@ std::vector<Part> MakePersonParts(const PersonLook& look, double s) {
     Part& lower = parts[kLowerLegL + 2 * side];
     lower.name = leg_names[2 * side + 1];
     lower.geoms.push_back(Limb(b.shank_r, b.shank, look.pants, s));
-    lower.geoms.push_back(MakeGeom(Shape::kBox, Eigen::Vector3d(0.125, 0.05, 0.04) * s,
-                                   Eigen::Vector3d(0.05, 0, -b.shank - 0.005) * s, look.shoes));
+    lower.geoms.push_back(MakeGeom(Shape::kBox, kShoeHalfSize * s, ShoeCentre() * s, look.shoes));
   }
   return parts;
 }
@@ -117,8 +131,10 @@ PersonJoints WalkJoints(double phase, double amount) {
     j.shoulder[side] = -amount * 22.0 * kDeg * swing;
     j.elbow[side] = (12.0 + amount * 12.0 * std::max(0.0, -swing)) * kDeg;
   }
-  // The pelvis is highest when the legs pass each other, lowest at full stride.
+  // The pelvis is highest when the legs pass each other, lowest at full stride; the
+  // height that puts the stance foot on the floor (feet_on_floor) refines it.
   j.pelvis_height_m = 0.92 - amount * 0.045 * std::abs(std::sin(w));
+  j.feet_on_floor = true;
   j.torso_pitch = amount * 4.0 * kDeg;
   j.torso_yaw = amount * 5.0 * kDeg * std::sin(w);  // shoulders counter-rotate the hips
   j.torso_roll = amount * 2.0 * kDeg * std::cos(w);
@@ -182,6 +198,17 @@ std::vector<Eigen::Isometry3d> PersonPartPoses(const PersonJoints& j, double s) 
     poses[kUpperLegL + 2 * side] = T_hip;
     poses[kLowerLegL + 2 * side] =
         T_hip * Pose(Ry(j.knee[side]), Eigen::Vector3d(0, 0, -b.thigh * s));
+  }
+  if (j.feet_on_floor) {
+    // The shoes are rigid on the shanks (no ankle): the lowest of their box corners
+    // touches the floor.
+    double lowest_m = std::numeric_limits<double>::infinity();
+    for (int side = 0; side < 2; ++side) {
+      for (const Eigen::Vector3d& corner : ShoeCorners(s)) {
+        lowest_m = std::min(lowest_m, (poses[kLowerLegL + 2 * side] * corner).z());
+      }
+    }
+    for (Eigen::Isometry3d& pose : poses) pose.translation().z() -= lowest_m;
   }
   return poses;
 }

@@ -7,6 +7,8 @@
 #include "core/error.h"
 #include "core/lens_distortion.h"
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <fstream>
 #include <functional>
@@ -49,6 +51,9 @@ std::string Describe(const Range& r) {
   return std::string("in ") + (r.lo_open ? "(" : "[") + Num(r.lo) + ", " + Num(r.hi) +
          (r.hi_open ? ")" : "]");
 }
+
+// What a scenario built in code, with no file, is named after in messages.
+constexpr const char* kBuiltInCodeOrigin = "<override>";
 
 // "<origin>: <key>: <what>"
 Error KeyError(const std::string& origin, const std::string& key, const std::string& what) {
@@ -161,7 +166,8 @@ class FieldTable {
     Add("office.walker_route", Choice(&o.walker_route, {"around_desk", "in_front"}, "office.walker_route"));
     Add("office.walker_front_distance_m",
         Double(&o.walker_front_distance_m, Closed(0.5, 1.9), "office.walker_front_distance_m"));
-    Add("office.walker_spacing_m", Double(&o.walker_spacing_m, Closed(0.4, 5), "office.walker_spacing_m"));
+    // 1.1 m along the in_front loop keeps two walkers' centres 0.6 m apart at its corners.
+    Add("office.walker_spacing_m", Double(&o.walker_spacing_m, Closed(1.1, 5), "office.walker_spacing_m"));
   }
 
   const Field* Find(const std::string& key) const {
@@ -462,6 +468,15 @@ Scenario ParseScenario(const std::string& yaml_text, const std::string& origin) 
                    "relocated_share + removed_share must be <= 1 (got " +
                        Num(s.pass2.relocated_share + s.pass2.removed_share) + ")");
   }
+  if (s.kind == "office" && s.office.walker_route == "in_front" && s.office.people_walking >= 2 &&
+      s.office.walker_front_distance_m > kMaxInFrontDistanceForPairsM + 1e-9) {
+    throw KeyError(origin, "office.walker_front_distance_m",
+                   "must be <= " + Num(kMaxInFrontDistanceForPairsM) + " for " +
+                       std::to_string(s.office.people_walking) +
+                       " walkers in_front (got " + Num(s.office.walker_front_distance_m) +
+                       "): their loop ends 0.65 m short of the desk, and two walkers pass each other across it "
+                       "only if it is 0.6 m deep");
+  }
   if (s.kind != "city" && s.pass2.relocated_shift_m > 0) {
     throw KeyError(origin, "pass2.relocated_shift_m",
                    "applies to city scenarios only (this one is '" + s.kind + "'); leave it 0");
@@ -471,7 +486,20 @@ Scenario ParseScenario(const std::string& yaml_text, const std::string& origin) 
                    "must leave at least 8 m for buildings after roads and sidewalks (got " +
                        Num(s.city.block_size_m) + ")");
   }
-  if (s.name.empty()) s.name = std::filesystem::path(origin).stem().string();
+  const bool name_from_file = s.name.empty();
+  // A scenario built in code (no file) without a name gets a plain one.
+  if (name_from_file) s.name = origin == kBuiltInCodeOrigin ? "scenario" : std::filesystem::path(origin).stem().string();
+  // The name becomes a folder name (the dataset cache, reports) and goes into JUnit XML.
+  const bool name_ok = !s.name.empty() && s.name.size() <= 100 && s.name.front() != '.' &&
+                       std::all_of(s.name.begin(), s.name.end(), [](char c) {
+                         return std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '_' || c == '-';
+                       });
+  if (!name_ok) {
+    throw KeyError(origin, "name",
+                   "'" + s.name + "'" + (name_from_file ? " (the file's name)" : "") +
+                       " must be 1 to 100 letters, digits, '.', '_' or '-', not starting with '.' (it names "
+                       "folders)");
+  }
   return s;
 }
 
@@ -504,7 +532,7 @@ YAML::Node ScenarioToYaml(const Scenario& scenario) {
 namespace {
 
 std::string OverrideOrigin(const Scenario& scenario) {
-  return scenario.source_file.empty() ? std::string("<override>") : scenario.source_file.string();
+  return scenario.source_file.empty() ? std::string(kBuiltInCodeOrigin) : scenario.source_file.string();
 }
 
 // The YAML that overrides edit: the file's own text, or the effective configuration.

@@ -112,6 +112,23 @@ TEST(ScenarioTest, WrongTypesAreRefused) {
   EXPECT_EQ(ParseError("camera: {fps: [1]}\n"), "my.yaml: camera.fps: expected a number (got a list)");
 }
 
+// The name names folders (dataset cache, reports) and goes into JUnit XML.
+TEST(ScenarioTest, NamesThatCannotNameAFolderAreRefused) {
+  EXPECT_EQ(ParseError("name: ../up\n"),
+            "my.yaml: name: '../up' must be 1 to 100 letters, digits, '.', '_' or '-', not starting with '.' (it "
+            "names folders)");
+  EXPECT_NE(ParseError("name: \"ofc\\x01<&>\"\n").find("must be 1 to 100 letters"), std::string::npos);
+  EXPECT_NE(ParseError("name: a b\n").find("'a b' must be"), std::string::npos);
+  EXPECT_NE(ParseError("name: " + std::string(101, 'a') + "\n").find("must be 1 to 100"), std::string::npos);
+  EXPECT_EQ(ParseScenario("name: city-2.v_1\n", "my.yaml").name, "city-2.v_1");
+  try {
+    ParseScenario("kind: office\n", "my scenario.yaml");
+    ADD_FAILURE() << "a file name with a space named the scenario";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("'my scenario' (the file's name)"), std::string::npos) << e.what();
+  }
+}
+
 TEST(ScenarioTest, MalformedYamlNamesLine) {
   const std::string error = ParseError("kind: city\ncity:\n  parked_cars: [1, 2\n  moving_cars: 3\n");
   EXPECT_EQ(error.rfind("my.yaml: line ", 0), 0u) << error;
@@ -176,8 +193,16 @@ TEST(ScenarioTest, ApplyOverrideSetsValuesWithTheSameChecks) {
 
 TEST(ScenarioTest, ApplyOverridesSplitsKeyAndValueAtTheFirstEquals) {
   Scenario s = LoadScenario(ScenarioPath("city_two_pass.yaml"));
-  ApplyOverrides(s, {"city.moving_cars=12", "pass2.camera_offset_m=[0, 2, 0]", "seed=5", "name=a=b"});
-  EXPECT_EQ(s.name, "a=b");
+  ApplyOverrides(s, {"city.moving_cars=12", "pass2.camera_offset_m=[0, 2, 0]", "seed=5", "name=a-b"});
+  EXPECT_EQ(s.name, "a-b");
+  // The value is what follows the first '=': here a name that is refused whole.
+  try {
+    Scenario other = LoadScenario(ScenarioPath("city_two_pass.yaml"));
+    ApplyOverrides(other, {"name=a=b"});
+    ADD_FAILURE() << "name a=b was taken";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("name: 'a=b' must be"), std::string::npos) << e.what();
+  }
   EXPECT_EQ(s.city.moving_cars, 12);
   EXPECT_DOUBLE_EQ(s.pass2.camera_offset_m.y(), 2.0);
   EXPECT_EQ(s.seed, 5u);

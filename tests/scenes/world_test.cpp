@@ -4,7 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <tuple>
 #include <vector>
 
@@ -85,6 +87,30 @@ TEST(WorldTest, AbductionSwingsEachArmOutToItsOwnSide) {
     const Eigen::Vector3d s = poses[shoulder].translation(), e = poses[elbow].translation();
     const double angle = std::atan2(outward * (e.y() - s.y()), s.z() - e.z());
     EXPECT_NEAR(angle, 20 * M_PI / 180, 1e-9);
+  }
+}
+
+// A walker's lower shoe rests on the floor through the whole gait, neither sunk into it
+// nor floating: the shoes are rigid on the shanks, so the body is lowered or lifted.
+TEST(WorldTest, WalkerStandsOnTheFloorThroughTheGait) {
+  for (double scale : {0.9, 1.0, 1.1}) {
+    const std::vector<Part> parts = MakePersonParts(PersonLook{}, scale);
+    for (double amount : {0.0, 0.5, 1.0}) {
+      for (int k = 0; k < 40; ++k) {
+        const std::vector<Eigen::Isometry3d> poses = PersonPartPoses(WalkJoints(k / 40.0, amount), scale);
+        double lowest_m = std::numeric_limits<double>::infinity();
+        for (size_t part = 0; part < parts.size(); ++part) {
+          for (const Geom& geom : parts[part].geoms) {
+            if (geom.shape != Shape::kBox) continue;  // the shoes are the lowest of its boxes
+            for (int c = 0; c < 8; ++c) {
+              const Eigen::Vector3d corner(c & 1 ? 1 : -1, c & 2 ? 1 : -1, c & 4 ? 1 : -1);
+              lowest_m = std::min(lowest_m, (poses[part] * geom.T_parent_geom * corner.cwiseProduct(geom.size)).z());
+            }
+          }
+        }
+        EXPECT_NEAR(lowest_m, 0.0, 1e-9) << "scale " << scale << " amount " << amount << " phase " << k / 40.0;
+      }
+    }
   }
 }
 
