@@ -166,8 +166,7 @@ class FieldTable {
     Add("office.walker_route", Choice(&o.walker_route, {"around_desk", "in_front"}, "office.walker_route"));
     Add("office.walker_front_distance_m",
         Double(&o.walker_front_distance_m, Closed(0.5, 1.9), "office.walker_front_distance_m"));
-    // 1.1 m along the in_front loop keeps two walkers' centres 0.6 m apart at its corners.
-    Add("office.walker_spacing_m", Double(&o.walker_spacing_m, Closed(1.1, 5), "office.walker_spacing_m"));
+    Add("office.walker_spacing_m", Double(&o.walker_spacing_m, Closed(0.4, 5), "office.walker_spacing_m"));
   }
 
   const Field* Find(const std::string& key) const {
@@ -467,15 +466,6 @@ Scenario ParseScenario(const std::string& yaml_text, const std::string& origin) 
     throw KeyError(origin, "pass2.removed_share",
                    "relocated_share + removed_share must be <= 1 (got " +
                        Num(s.pass2.relocated_share + s.pass2.removed_share) + ")");
-  }
-  if (s.kind == "office" && s.office.walker_route == "in_front" && s.office.people_walking >= 2 &&
-      s.office.walker_front_distance_m > kMaxInFrontDistanceForPairsM + 1e-9) {
-    throw KeyError(origin, "office.walker_front_distance_m",
-                   "must be <= " + Num(kMaxInFrontDistanceForPairsM) + " for " +
-                       std::to_string(s.office.people_walking) +
-                       " walkers in_front (got " + Num(s.office.walker_front_distance_m) +
-                       "): their loop ends 0.65 m short of the desk, and two walkers pass each other across it "
-                       "only if it is 0.6 m deep");
   }
   if (s.kind != "city" && s.pass2.relocated_shift_m > 0) {
     throw KeyError(origin, "pass2.relocated_shift_m",

@@ -93,16 +93,11 @@ struct OfficeSpec {
   // the camera and the desk, in view most of the time and filling much of the image, as
   // the pair in TUM's fr3/walking sequences does (what makes plain ORB-SLAM2 fail there).
   std::string walker_route = "around_desk";
-  // Leg of the walkers' loop nearest to the camera's base pose, ahead of it. The
-  // in_front loop runs from there to 0.65 m short of the desk (2 m from the base pose),
-  // at most 0.6 m deep; two walkers or more need all of it to pass each other, so there
-  // it is at most kMaxInFrontDistanceForPairsM.
+  // Leg of the walkers' loop nearest to the camera's base pose, ahead of it.
   double walker_front_distance_m = 1.15;
   // in_front: gap along the loop from one walker to the next.
-  double walker_spacing_m = 1.1;
+  double walker_spacing_m = 0.6;
 };
-
-constexpr double kMaxInFrontDistanceForPairsM = 0.75;
 
 struct Scenario {
   std::filesystem::path source_file;  // where it was read from ("" if built in code)
