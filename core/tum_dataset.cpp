@@ -14,6 +14,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/image_io.h"
+#include "core/manifest.h"
 
 namespace segslam {
 namespace {
@@ -323,6 +324,11 @@ TumSequence TumSequence::Open(const std::filesystem::path& dir,
 TumSequence TumSequence::OpenWithCameraFile(const std::filesystem::path& dir, const std::string& camera_yaml) {
   if (camera_yaml.empty()) return Open(dir);
   return Open(dir, ReadCameraYaml(camera_yaml));
+}
+
+std::string TumSequence::FirstFrameSha256() const {
+  if (entries_.empty()) throw FileError(dir_, "the sequence has no frames");
+  return Sha256OfFile(dir_ / entries_.front().rgb_file);
 }
 
 RgbdFrame TumSequence::LoadFrame(size_t i) const {

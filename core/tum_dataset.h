@@ -98,6 +98,11 @@ class TumSequence {
   // camera's.
   RgbdFrame LoadFrame(size_t i) const;
 
+  // SHA-256 of the first frame's colour file, lowercase hex: what tells this sequence
+  // from another with the same stamps (the two passes of a generated dataset, or two
+  // datasets, share them). Throws naming the file if it cannot be read or there is none.
+  std::string FirstFrameSha256() const;
+
   // An instance mask (16-bit PNG) drawn on this sequence's stored images, e.g. by an
   // external segmenter, in the geometry of LoadFrame's images. Throws naming the file if
   // it is unreadable, not 16-bit single-channel or of a size other than the camera's.

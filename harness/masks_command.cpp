@@ -81,8 +81,14 @@ int RunMasksImages(const MasksImagesArgs& args) {
                           {"name", std::string(category.name)},
                           {"supercategory", std::string(category.supercategory)}});
   }
+  nlohmann::json info = {{"description", "colour images of " + sequence.dir().string() + " (file names relative to it)"}};
+  if (sequence.size() > 0) {
+    // What tells this sequence from another with the same stamps (CocoDetections::Read).
+    info["first_frame"] = sequence.entries().front().rgb_file;
+    info["first_frame_sha256"] = sequence.FirstFrameSha256();
+  }
   const nlohmann::json dataset = {
-      {"info", {{"description", "colour images of " + sequence.dir().string() + " (file names relative to it)"}}},
+      {"info", info},
       {"images", images},
       {"annotations", nlohmann::json::array()},
       {"categories", categories}};
@@ -151,6 +157,7 @@ int RunMasksImport(const MasksImportArgs& args) {
     }
   }
   if (!args.quiet) bar.Finish();
+  seg::WriteMaskFolderRecord(staging.path(), sequence);
   staging.Commit();
 
   const seg::CocoImportCounts& counts = detections.counts();

@@ -158,6 +158,7 @@ SlamRunResult RunMutualLoop(const TumSequence& sequence, const SlamRunOptions& o
     std::error_code error;
     fs::create_directories(options.refined_masks_dir, error);
     if (error) throw FileError(options.refined_masks_dir, "cannot create: " + error.message());
+    seg::WriteMaskFolderRecord(options.refined_masks_dir, sequence);
   }
 
   SlamRunResult result;

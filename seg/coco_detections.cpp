@@ -97,6 +97,23 @@ int CocoCategoryOf(long long category_id, const std::optional<ImageList>& images
   return category->id;
 }
 
+// An image list written by segslam (a generated sequence's annotations_coco.json, `masks
+// images`) names its sequence's first frame and that file's SHA-256: the same first file
+// name with another image is another sequence with the same stamps.
+void CheckImageListIsForSequence(const nlohmann::json& list, const std::string& origin, const TumSequence& sequence) {
+  if (!list.is_object() || !list.contains("info") || !list.at("info").is_object() || sequence.size() == 0) return;
+  const nlohmann::json& info = list.at("info");
+  const auto first_frame = info.find("first_frame");
+  const auto sha = info.find("first_frame_sha256");
+  if (first_frame == info.end() || sha == info.end() || !first_frame->is_string() || !sha->is_string()) return;
+  if (first_frame->get<std::string>() != sequence.entries().front().rgb_file) return;
+  if (sha->get<std::string>() != sequence.FirstFrameSha256()) {
+    throw Error(fmt::format("{}: made for another sequence than {} (its first frame, {}, is another image; info: {})",
+                            origin, sequence.dir().string(), first_frame->get<std::string>(),
+                            info.value("description", std::string("-"))));
+  }
+}
+
 }  // namespace
 
 CocoDetections CocoDetections::Read(const fs::path& file, const TumSequence& sequence,
@@ -109,8 +126,11 @@ CocoDetections CocoDetections::Read(const fs::path& file, const TumSequence& seq
   }
   std::optional<ImageList> images;
   if (!options.images_file.empty()) {
-    images = ReadImageList(ReadJsonFile(options.images_file), options.images_file.string());
+    const nlohmann::json list = ReadJsonFile(options.images_file);
+    CheckImageListIsForSequence(list, options.images_file.string(), sequence);
+    images = ReadImageList(list, options.images_file.string());
   } else if (dataset_file) {
+    CheckImageListIsForSequence(json, origin, sequence);
     images = ReadImageList(json, origin);
   }
   const nlohmann::json& detections = dataset_file ? json.at("annotations") : json;

@@ -1,5 +1,7 @@
 #include "seg/external_masks.h"
 
+#include <algorithm>
+
 #include <fmt/format.h>
 
 #include "core/atomic_file.h"
@@ -149,9 +151,40 @@ void WriteExternalMaskFiles(const fs::path& dir, const std::string& stem, const 
   WriteFileAtomically(dir / (stem + ".json"), table.dump() + "\n");
 }
 
+void WriteMaskFolderRecord(const fs::path& dir, const TumSequence& sequence) {
+  const nlohmann::json record = {{"sequence", sequence.dir().string()},
+                                 {"first_frame", sequence.entries().front().rgb_file},
+                                 {"first_frame_sha256", sequence.FirstFrameSha256()}};
+  WriteFileAtomically(dir / "sequence.json", record.dump(1) + "\n");
+}
+
+namespace {
+
+// A record for another sequence's frames (same first stem, other image) is refused; one
+// for a sequence whose first frame this one lacks says nothing, and is let be.
+void CheckMaskFolderRecord(const fs::path& dir, const TumSequence& sequence) {
+  const fs::path file = dir / "sequence.json";
+  if (!fs::exists(file) || sequence.size() == 0) return;
+  const nlohmann::json record = ReadJsonFile(file);
+  if (!record.is_object() || !record.value("first_frame", nlohmann::json()).is_string() ||
+      !record.value("first_frame_sha256", nlohmann::json()).is_string()) {
+    throw FileError(file, "expected {\"first_frame\": ..., \"first_frame_sha256\": ...}");
+  }
+  if (record["first_frame"] != sequence.entries().front().rgb_file) return;
+  if (record["first_frame_sha256"] != sequence.FirstFrameSha256()) {
+    throw FileError(file, fmt::format("these masks were made for {}, whose frames are not those of {} (the first "
+                                      "frame, {}, differs)",
+                                      record.value("sequence", std::string("another sequence")),
+                                      sequence.dir().string(), sequence.entries().front().rgb_file));
+  }
+}
+
+}  // namespace
+
 ExternalMaskSegmenter::ExternalMaskSegmenter(const fs::path& dir, const TumSequence& sequence, size_t frames)
     : dir_(dir), sequence_(sequence) {
   if (!fs::is_directory(dir_)) throw FileError(dir_, "external masks folder does not exist");
+  CheckMaskFolderRecord(dir_, sequence_);
   const size_t checked = frames > 0 ? std::min(frames, sequence_.size()) : sequence_.size();
   for (size_t i = 0; i < checked; ++i) {
     for (const fs::path& path : {MaskPath(i), TablePath(i)}) {

@@ -55,14 +55,20 @@ FrameSegmentation ExternalMasksToSegmentation(
 void WriteExternalMaskFiles(const std::filesystem::path& dir, const std::string& stem, const cv::Mat& stored_ids,
                             const FrameSegmentation& masks);
 
+// Records in <dir>/sequence.json which sequence a folder of masks was made for (its
+// first frame's colour file and that file's SHA-256), as segslam's own writers do (a
+// run's refined_masks/, `masks import`): frames of another sequence often share the stems.
+void WriteMaskFolderRecord(const std::filesystem::path& dir, const TumSequence& sequence);
+
 // Reads the masks of a sequence's frames from a folder. Not copyable.
 class ExternalMaskSegmenter : public Segmenter {
  public:
   // Checks that `dir` is a folder and holds <stem>.png and <stem>.json for every frame of
   // `sequence`, or for its first `frames` when that is above 0 (a run cut with --frames,
-  // fed the masks of an earlier cut run); throws segslam::Error naming the first missing
-  // file (a folder that skips frames) otherwise. The files' contents are checked frame by
-  // frame in Segment().
+  // fed the masks of an earlier cut run), and that its sequence.json, where there is one
+  // (WriteMaskFolderRecord), names this sequence's first frame; throws segslam::Error
+  // naming the first missing file (a folder that skips frames) or the record otherwise.
+  // The files' contents are checked frame by frame in Segment().
   ExternalMaskSegmenter(const std::filesystem::path& dir, const TumSequence& sequence, size_t frames = 0);
   ExternalMaskSegmenter(const ExternalMaskSegmenter&) = delete;
   ExternalMaskSegmenter& operator=(const ExternalMaskSegmenter&) = delete;

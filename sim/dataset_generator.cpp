@@ -104,8 +104,10 @@ InstanceTable InstancesOfPass(const scenes::World& world, scenes::Pass pass) {
   return table;
 }
 
+// `first_frame_sha256`: of the first frame's colour file, so that an import onto another
+// sequence with the same stamps is refused (seg::CocoDetections::Read).
 nlohmann::json CocoAnnotations(const scenes::World& world, const InstanceTable& instances,
-                               const std::vector<FrameRecord>& frames) {
+                               const std::vector<FrameRecord>& frames, const std::string& first_frame_sha256) {
   nlohmann::json images = nlohmann::json::array();
   nlohmann::json annotations = nlohmann::json::array();
   std::set<int> used_categories;
@@ -144,8 +146,12 @@ nlohmann::json CocoAnnotations(const scenes::World& world, const InstanceTable& 
                           {"name", std::string(category->name)},
                           {"supercategory", std::string(category->supercategory)}});
   }
-  return {{"info", {{"description", "segslam synthetic sequence " + world.name},
-                    {"version", "1.0"}}},
+  nlohmann::json info = {{"description", "segslam synthetic sequence " + world.name}, {"version", "1.0"}};
+  if (!frames.empty()) {
+    info["first_frame"] = "rgb/" + TumSequenceWriter::StampName(frames.front().stamp_s) + ".png";
+    info["first_frame_sha256"] = first_frame_sha256;
+  }
+  return {{"info", info},
           {"images", images},
           {"annotations", annotations},
           {"categories", categories}};
@@ -218,7 +224,11 @@ double KindDefaultMaxDepth(const scenes::World& world) {
 void WritePassMetadata(const fs::path& pass_dir, const scenes::World& world, const scenes::Scenario& scenario,
                        scenes::Pass pass, const InstanceTable& instances, const std::vector<FrameRecord>& records) {
   instances.Write(pass_dir / "instances.json");
-  WriteFileAtomically(pass_dir / "annotations_coco.json", CocoAnnotations(world, instances, records).dump() + "\n");
+  const std::string first_frame_sha256 =
+      records.empty() ? std::string()
+                      : Sha256OfFile(pass_dir / "rgb" / (TumSequenceWriter::StampName(records.front().stamp_s) + ".png"));
+  WriteFileAtomically(pass_dir / "annotations_coco.json",
+                      CocoAnnotations(world, instances, records, first_frame_sha256).dump() + "\n");
   WriteTracks(pass_dir / "tracks.json", ObjectTracks(world, pass, records));
   WriteFileAtomically(pass_dir / "scenario.yaml", scenario.text);
   WriteManifest(pass_dir, {{"scenario", scenario.name},

@@ -182,6 +182,15 @@ TEST_F(CocoDetectionsTest, DatasetFileWithItsOwnImages) {
   listed_size["images"][0]["width"] = kWidth;
   listed_size["images"][0]["height"] = kHeight;
   EXPECT_EQ(CocoDetections::Read(Write("listed_size.json", listed_size), sequence_, {}).Frame(0).instances.size(), 1u);
+  // An image list that names this sequence's first frame with another image's SHA-256
+  // (segslam writes both) was made for another sequence with the same stamps.
+  json recorded = dataset;
+  recorded["info"] = {{"description", "segslam synthetic sequence other"},
+                      {"first_frame", sequence_.entries().front().rgb_file},
+                      {"first_frame_sha256", std::string(64, '0')}};
+  EXPECT_NE(ReadError(Write("recorded.json", recorded)).find("made for another sequence than"), std::string::npos);
+  recorded["info"]["first_frame_sha256"] = sequence_.FirstFrameSha256();
+  EXPECT_EQ(CocoDetections::Read(Write("recorded.json", recorded), sequence_, {}).Frame(0).instances.size(), 1u);
   const FrameSegmentation frame0 = detections.Frame(0);
   ASSERT_EQ(frame0.instances.size(), 1u);
   EXPECT_EQ(frame0.instances[0].category_id, 3);

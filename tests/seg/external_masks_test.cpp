@@ -125,6 +125,23 @@ TEST_F(ExternalMasksTest, FolderThatSkipsAFrame) {
   EXPECT_THROW(ExternalMaskSegmenter(root_ / "nowhere", sequence_), Error);
 }
 
+// segslam's writers record the sequence a folder was made for: another sequence with
+// the same stamps (the other pass of a generated dataset, another dataset) is refused,
+// and a folder without a record (an external tool's) is read as before.
+TEST_F(ExternalMasksTest, FolderRecordedForAnotherSequenceIsRefused) {
+  WriteMaskFolderRecord(masks_, sequence_);
+  EXPECT_NO_THROW(ExternalMaskSegmenter(masks_, sequence_));
+  const TumSequence other = testing::WriteFlatSequence(root_ / "other", kWidth, kHeight, kFrames, 10.0, 0.5);
+  WriteColorImage(other.dir() / other.entries().front().rgb_file,
+                  cv::Mat(kHeight, kWidth, CV_8UC3, cv::Scalar(10, 200, 30)));
+  const std::string error = testing::ErrorMessage([&] { ExternalMaskSegmenter(masks_, other); });
+  EXPECT_NE(error.find((masks_ / "sequence.json").string() + ": these masks were made for " + sequence_.dir().string()),
+            std::string::npos)
+      << error;
+  fs::remove(masks_ / "sequence.json");
+  EXPECT_NO_THROW(ExternalMaskSegmenter(masks_, other));
+}
+
 // A run cut with --frames N writes masks for its N frames; a run cut the same way reads
 // them back, and a longer one is refused naming the first frame without its files.
 TEST_F(ExternalMasksTest, FolderOfTheFirstFramesServesARunOfThoseFrames) {
