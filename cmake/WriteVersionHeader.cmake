@@ -15,7 +15,9 @@ elseif(version MATCHES "-dirty$")
   execute_process(COMMAND git diff HEAD --binary
                   WORKING_DIRECTORY ${SOURCE_DIR}
                   OUTPUT_VARIABLE changes ERROR_QUIET)
-  execute_process(COMMAND git ls-files --others --exclude-standard
+  # Untracked sources only: editor and tool files outside .gitignore change no build.
+  execute_process(COMMAND git -c core.quotePath=false ls-files --others --exclude-standard --
+                          *.cpp *.h *.cmake CMakeLists.txt */CMakeLists.txt *.yaml *.sh
                   WORKING_DIRECTORY ${SOURCE_DIR}
                   OUTPUT_VARIABLE untracked OUTPUT_STRIP_TRAILING_WHITESPACE ERROR_QUIET)
   if(untracked)

@@ -274,16 +274,34 @@ std::vector<Expectation> CheckableExpectations(std::vector<Expectation> expectat
   return expectations;
 }
 
+// True when `file` is the results.json of a segslam scenario report (one made before
+// report folders were marked).
+bool IsReportResults(const fs::path& file) {
+  try {
+    const nlohmann::json results = ReadJsonFile(file);
+    return results.is_object() && results.contains("code_version") && results.contains("runs") &&
+           results.contains("expectations");
+  } catch (const Error&) {
+    return false;
+  }
+}
+
 // A report folder is marked as one when a run first writes to it. Its earlier report is
 // replaced (runs/ and figures/ removed whole), so a folder with other contents and no
-// mark, nor the results.json or scenario.yaml of a report made before marks were kept,
-// is refused rather than emptied.
-void ClaimReportFolder(const fs::path& report_dir) {
+// mark, nor the results.json of a report made before marks were kept, is refused rather
+// than emptied; so is the folder of the scenario file itself, whose scenario.yaml the
+// report would replace.
+void ClaimReportFolder(const fs::path& report_dir, const fs::path& scenario_file) {
   const fs::path mark = report_dir / ".segslam-report";
   if (fs::exists(report_dir) && !fs::is_empty(report_dir) && !fs::exists(mark) &&
-      !fs::exists(report_dir / "results.json") && !fs::exists(report_dir / "scenario.yaml")) {
+      !IsReportResults(report_dir / "results.json")) {
     throw FileError(report_dir,
                     "holds other files and no segslam scenario report, which a run would replace; choose another --out");
+  }
+  std::error_code error;
+  if (fs::equivalent(report_dir / "scenario.yaml", scenario_file, error)) {
+    throw FileError(report_dir, "holds the scenario file itself as scenario.yaml, which the report would replace; "
+                                "choose another --out");
   }
   fs::create_directories(report_dir);
   WriteFileAtomically(mark, "A segslam scenario report: `segslam scenario run` replaces what is here.\n");
@@ -371,7 +389,7 @@ ScenarioReport RunScenarioToReport(const ScenarioRunRequest& args) {
   for (const std::string& name : skipped) fmt::print("expectation {} not checked: --modes leaves its mode out\n", name);
 
   std::fflush(stdout);
-  ClaimReportFolder(report_dir);
+  ClaimReportFolder(report_dir, args.scenario_file);
   // An earlier report in the same place goes first (before a generation that may fail or
   // be interrupted), so a run that stops half-way leaves no results.json or JUnit file
   // that looks complete.

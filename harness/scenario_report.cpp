@@ -884,12 +884,22 @@ bool ScenarioReport::Passed() const {
 }
 
 std::string ScenarioReport::ToJUnitXml() const {
-  const auto failures = std::count_if(checks.begin(), checks.end(), [](const auto& c) { return !c.passed; });
+  // A run that checked none of its expectations fails as a testcase of its own, so that a
+  // CI reading the XML sees what the exit code says.
+  const bool nothing_checked = checks.empty() && !not_checked.empty();
+  const auto failures =
+      std::count_if(checks.begin(), checks.end(), [](const auto& c) { return !c.passed; }) + (nothing_checked ? 1 : 0);
   std::string text = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
   text += fmt::format(
       "<testsuites>\n<testsuite name=\"{}\" tests=\"{}\" failures=\"{}\" errors=\"0\" skipped=\"{}\" time=\"{:.3f}\">\n",
-      EscapeXml("segslam scenario " + scenario_name), checks.size() + not_checked.size(), failures, not_checked.size(),
-      seconds);
+      EscapeXml("segslam scenario " + scenario_name), checks.size() + not_checked.size() + (nothing_checked ? 1 : 0),
+      failures, not_checked.size(), seconds);
+  if (nothing_checked) {
+    text += fmt::format(
+        "  <testcase classname=\"{}\" name=\"no expectation checked\" time=\"0\"><failure message=\"{}\"/></testcase>\n",
+        EscapeXml("segslam.scenario." + scenario_name),
+        EscapeXml("--modes leaves out a mode of every expectation of the scenario"));
+  }
   for (const ExpectationResult& r : checks) {
     text += fmt::format("  <testcase classname=\"{}\" name=\"{}\" time=\"0\">",
                         EscapeXml("segslam.scenario." + scenario_name),

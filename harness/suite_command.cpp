@@ -264,10 +264,12 @@ int RunSuite(const SuiteArgs& args) {
   const fs::path out_dir = args.out_dir.empty() ? fs::path("reports") / suite.name : fs::path(args.out_dir);
   fmt::print("segslam scenario suite: {} ({} entries) into {}\n", suite.name, suite.entries.size(), out_dir.string());
   std::vector<nlohmann::json> results;
-  int failed_checks = 0, checks = 0;
+  int failed_checks = 0, checks = 0, not_checked = 0, entries_failed = 0;
   for (std::size_t i = 0; i < suite.entries.size(); ++i) {
     const ScenarioReport report = RunSuiteEntry(suite, i, args, out_dir);
     checks += static_cast<int>(report.checks.size());
+    not_checked += static_cast<int>(report.not_checked.size());
+    entries_failed += report.Passed() ? 0 : 1;
     failed_checks += static_cast<int>(std::count_if(report.checks.begin(), report.checks.end(),
                                                     [](const ExpectationResult& check) { return !check.passed; }));
     results.push_back(report.ToJson());
@@ -313,12 +315,17 @@ int RunSuite(const SuiteArgs& args) {
   joined["seconds"] = seconds;
   joined["checks"] = checks;
   joined["failed_checks"] = failed_checks;
+  joined["not_checked"] = not_checked;
+  joined["passed"] = entries_failed == 0;
   WriteFileAtomically(out_dir / "suite_results.json", joined.dump(2) + "\n");
   document.Write(out_dir);
   fmt::print("{}", text);
-  fmt::print("suite {}: {} entries, {} of {} expectations passed, {:.1f} s, report in {}\n", suite.name,
-             suite.entries.size(), checks - failed_checks, checks, seconds, (out_dir / "report.html").string());
-  return failed_checks == 0 ? 0 : 2;
+  fmt::print("suite {}: {} entries, {} of {} expectations passed{}, {:.1f} s, report in {}\n", suite.name,
+             suite.entries.size(), checks - failed_checks, checks,
+             not_checked > 0 ? fmt::format(", {} not checked", not_checked) : std::string(), seconds,
+             (out_dir / "report.html").string());
+  // An entry that could check none of its expectations verified nothing (ScenarioReport::Passed).
+  return entries_failed == 0 ? 0 : 2;
 }
 
 }  // namespace

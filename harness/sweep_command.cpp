@@ -97,8 +97,13 @@ void ClaimSweepFolder(const fs::path& out_dir, const nlohmann::json& sweep) {
     } catch (const Error&) {
       // unreadable: refused below like another sweep's
     }
-    if (existing.value("grid", nlohmann::json()) != sweep["grid"] ||
-        existing.value("settings", nlohmann::json()) != sweep["settings"]) {
+    const nlohmann::json existing_settings = existing.value("settings", nlohmann::json());
+    if (existing_settings.is_object() && !existing_settings.contains("scenario")) {
+      throw Error("sweep: " + out_dir.string() +
+                  " holds a sweep of an older segslam, which did not record the scenario's content; choose another "
+                  "--out");
+    }
+    if (existing.value("grid", nlohmann::json()) != sweep["grid"] || existing_settings != sweep["settings"]) {
       throw Error("sweep: " + out_dir.string() +
                   " holds another sweep (sweep.json differs: grid, scenario file or its content, --frames, --modes, "
                   "--repeats, --segmenter or --set); choose another --out");

@@ -131,9 +131,8 @@ PersonJoints WalkJoints(double phase, double amount) {
     j.shoulder[side] = -amount * 22.0 * kDeg * swing;
     j.elbow[side] = (12.0 + amount * 12.0 * std::max(0.0, -swing)) * kDeg;
   }
-  // The pelvis is highest when the legs pass each other, lowest at full stride; the
-  // height that puts the stance foot on the floor (feet_on_floor) refines it.
-  j.pelvis_height_m = 0.92 - amount * 0.045 * std::abs(std::sin(w));
+  // The body's height follows from the legs: the lower shoe rests on the floor, so the
+  // pelvis is highest when the legs pass each other and lowest at full stride.
   j.feet_on_floor = true;
   j.torso_pitch = amount * 4.0 * kDeg;
   j.torso_yaw = amount * 5.0 * kDeg * std::sin(w);  // shoulders counter-rotate the hips

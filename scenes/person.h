@@ -48,8 +48,8 @@ struct PersonJoints {
   double shoulder[2] = {0, 0};
   double shoulder_out[2] = {0.08, 0.08};  // abduction, away from the torso
   double elbow[2] = {0, 0};
-  // The body is lifted or lowered until the lower shoe's sole rests on the floor, so
-  // pelvis_height_m only sets the legs' start (a walker; a sitter's pelvis is on a seat).
+  // The body is lifted or lowered until the lower shoe's sole rests on the floor, and
+  // pelvis_height_m no longer matters (a walker; a sitter's pelvis is on a seat).
   bool feet_on_floor = false;
 };
 

@@ -108,9 +108,11 @@ void CheckImageListIsForSequence(const nlohmann::json& list, const std::string& 
   if (first_frame == info.end() || sha == info.end() || !first_frame->is_string() || !sha->is_string()) return;
   if (first_frame->get<std::string>() != sequence.entries().front().rgb_file) return;
   if (sha->get<std::string>() != sequence.FirstFrameSha256()) {
+    const auto description = info.find("description");
     throw Error(fmt::format("{}: made for another sequence than {} (its first frame, {}, is another image; info: {})",
                             origin, sequence.dir().string(), first_frame->get<std::string>(),
-                            info.value("description", std::string("-"))));
+                            description != info.end() && description->is_string() ? description->get<std::string>()
+                                                                                   : std::string("-")));
   }
 }
 

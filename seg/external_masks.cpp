@@ -155,7 +155,7 @@ void WriteMaskFolderRecord(const fs::path& dir, const TumSequence& sequence) {
   const nlohmann::json record = {{"sequence", sequence.dir().string()},
                                  {"first_frame", sequence.entries().front().rgb_file},
                                  {"first_frame_sha256", sequence.FirstFrameSha256()}};
-  WriteFileAtomically(dir / "sequence.json", record.dump(1) + "\n");
+  WriteFileAtomically(dir / "segslam_sequence.json", record.dump(1) + "\n");
 }
 
 namespace {
@@ -163,19 +163,22 @@ namespace {
 // A record for another sequence's frames (same first stem, other image) is refused; one
 // for a sequence whose first frame this one lacks says nothing, and is let be.
 void CheckMaskFolderRecord(const fs::path& dir, const TumSequence& sequence) {
-  const fs::path file = dir / "sequence.json";
+  const fs::path file = dir / "segslam_sequence.json";
   if (!fs::exists(file) || sequence.size() == 0) return;
   const nlohmann::json record = ReadJsonFile(file);
-  if (!record.is_object() || !record.value("first_frame", nlohmann::json()).is_string() ||
-      !record.value("first_frame_sha256", nlohmann::json()).is_string()) {
-    throw FileError(file, "expected {\"first_frame\": ..., \"first_frame_sha256\": ...}");
+  const auto text = [&](const char* key) {
+    return record.is_object() && record.contains(key) && record.at(key).is_string() ? record.at(key).get<std::string>()
+                                                                                     : std::string();
+  };
+  if (text("first_frame").empty() || text("first_frame_sha256").empty()) {
+    throw FileError(file, "expected {\"first_frame\": \"...\", \"first_frame_sha256\": \"...\"} (strings)");
   }
-  if (record["first_frame"] != sequence.entries().front().rgb_file) return;
-  if (record["first_frame_sha256"] != sequence.FirstFrameSha256()) {
+  if (text("first_frame") != sequence.entries().front().rgb_file) return;
+  if (text("first_frame_sha256") != sequence.FirstFrameSha256()) {
+    const std::string made_for = text("sequence").empty() ? std::string("another sequence") : text("sequence");
     throw FileError(file, fmt::format("these masks were made for {}, whose frames are not those of {} (the first "
                                       "frame, {}, differs)",
-                                      record.value("sequence", std::string("another sequence")),
-                                      sequence.dir().string(), sequence.entries().front().rgb_file));
+                                      made_for, sequence.dir().string(), sequence.entries().front().rgb_file));
   }
 }
 

@@ -55,7 +55,7 @@ FrameSegmentation ExternalMasksToSegmentation(
 void WriteExternalMaskFiles(const std::filesystem::path& dir, const std::string& stem, const cv::Mat& stored_ids,
                             const FrameSegmentation& masks);
 
-// Records in <dir>/sequence.json which sequence a folder of masks was made for (its
+// Records in <dir>/segslam_sequence.json which sequence a folder of masks was made for (its
 // first frame's colour file and that file's SHA-256), as segslam's own writers do (a
 // run's refined_masks/, `masks import`): frames of another sequence often share the stems.
 void WriteMaskFolderRecord(const std::filesystem::path& dir, const TumSequence& sequence);
@@ -65,7 +65,7 @@ class ExternalMaskSegmenter : public Segmenter {
  public:
   // Checks that `dir` is a folder and holds <stem>.png and <stem>.json for every frame of
   // `sequence`, or for its first `frames` when that is above 0 (a run cut with --frames,
-  // fed the masks of an earlier cut run), and that its sequence.json, where there is one
+  // fed the masks of an earlier cut run), and that its segslam_sequence.json, where there is one
   // (WriteMaskFolderRecord), names this sequence's first frame; throws segslam::Error
   // naming the first missing file (a folder that skips frames) or the record otherwise.
   // The files' contents are checked frame by frame in Segment().

@@ -277,10 +277,10 @@ std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& ins
     s.KeepOutOfPoseAndMap(judgement, features);
     judgements.push_back(judgement);
   }
-  // Every match counts, inlier of the coarse pose or not: a point made on an object its
-  // mask missed moves with the object, and its later matches are the coarse pose's
-  // outliers.
-  for (size_t i = 0; i < s.current.points.size(); ++i) {
+  // Every match of a tracked frame counts, inlier of the coarse pose or not: a point made
+  // on an object its mask missed moves with the object, and its later matches are the
+  // coarse pose's outliers. A lost frame's matches were made at a wrong pose.
+  for (size_t i = 0; s.coarse_ok && i < s.current.points.size(); ++i) {
     MapPoint* point = s.current.points[i];
     if (point == nullptr || point->bad || point->fixed) continue;
     ++point->labelled_sightings;

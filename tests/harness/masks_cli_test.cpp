@@ -173,8 +173,8 @@ TEST_F(MasksCliTest, ExportAndImportAreInverse) {
     EXPECT_EQ(ReadText(entry.path()), ReadText(folder_again / entry.path().filename())) << entry.path().filename();
     ++files;
   }
-  EXPECT_EQ(files, 81);  // a PNG and a table per frame, and the folder's sequence.json
-  EXPECT_TRUE(fs::exists(folder / "sequence.json"));
+  EXPECT_EQ(files, 81);  // a PNG and a table per frame, and the folder's segslam_sequence.json
+  EXPECT_TRUE(fs::exists(folder / "segslam_sequence.json"));
 
   const CommandOutput neither = Run("masks export " + sequence_.string() + " --out " + again);
   EXPECT_EQ(neither.exit_code, 1);

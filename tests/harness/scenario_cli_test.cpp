@@ -75,6 +75,17 @@ TEST_F(ScenarioCliTest, OutFolderOfOtherFilesIsRefusedAndKept) {
       << result.stderr_text;
   EXPECT_EQ(ReadText(victim / "runs" / "important.txt"), "keep me\n");
   EXPECT_TRUE(fs::exists(victim / "figures" / "plot.png"));
+
+  // The scenario's own folder, whose scenario.yaml the report would replace.
+  const fs::path experiment = dir_ / "experiment";
+  fs::create_directories(experiment);
+  fs::copy_file(kSmallOffice, experiment / "scenario.yaml");
+  const CommandOutput own = Run("scenario run " + (experiment / "scenario.yaml").string() + " --cache " +
+                                (dir_ / "cache").string() + " --out " + experiment.string() + " -q");
+  EXPECT_EQ(own.exit_code, 1);
+  EXPECT_NE(own.stderr_text.find("holds other files and no segslam scenario report"), std::string::npos)
+      << own.stderr_text;
+  EXPECT_EQ(ReadText(experiment / "scenario.yaml"), ReadText(kSmallOffice));
   EXPECT_FALSE(fs::exists(dir_ / "cache"));
 }
 

@@ -135,10 +135,10 @@ TEST_F(ExternalMasksTest, FolderRecordedForAnotherSequenceIsRefused) {
   WriteColorImage(other.dir() / other.entries().front().rgb_file,
                   cv::Mat(kHeight, kWidth, CV_8UC3, cv::Scalar(10, 200, 30)));
   const std::string error = testing::ErrorMessage([&] { ExternalMaskSegmenter(masks_, other); });
-  EXPECT_NE(error.find((masks_ / "sequence.json").string() + ": these masks were made for " + sequence_.dir().string()),
+  EXPECT_NE(error.find((masks_ / "segslam_sequence.json").string() + ": these masks were made for " + sequence_.dir().string()),
             std::string::npos)
       << error;
-  fs::remove(masks_ / "sequence.json");
+  fs::remove(masks_ / "segslam_sequence.json");
   EXPECT_NO_THROW(ExternalMaskSegmenter(masks_, other));
 }
 
