@@ -14,6 +14,7 @@
 #include "core/instances.h"
 #include "core/json_file.h"
 #include "core/pose.h"
+#include "core/statistics.h"
 #include "core/tum_dataset.h"
 #include "harness/dataset_run.h"
 #include "harness/interrupt.h"
@@ -645,11 +646,9 @@ Spread SpreadOf(std::vector<double> values) {
     spread.median = spread.min = spread.max = kNaN;
     return spread;
   }
-  std::sort(values.begin(), values.end());
-  const std::size_t n = values.size();
-  spread.median = n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
-  spread.min = values.front();
-  spread.max = values.back();
+  spread.median = Median(values);
+  spread.min = *std::min_element(values.begin(), values.end());
+  spread.max = *std::max_element(values.begin(), values.end());
   return spread;
 }
 

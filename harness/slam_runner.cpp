@@ -12,6 +12,7 @@
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/instances.h"
+#include "core/statistics.h"
 #include "seg/external_masks.h"
 #include "seg/simulated_segmenter.h"
 
@@ -114,13 +115,6 @@ class MaskSource {
   std::unordered_set<std::uint16_t> moveable_;
 };
 
-// numpy's median (the mean of the two middle values for an even count); 0 for none.
-double Median(std::vector<double> values) {
-  if (values.empty()) return 0;
-  std::sort(values.begin(), values.end());
-  const std::size_t n = values.size();
-  return n % 2 == 1 ? values[n / 2] : (values[n / 2 - 1] + values[n / 2]) / 2;
-}
 
 // A map reset voids the poses of the frames before it: they are in the frame of a map
 // that no longer exists, so they count as lost, as ORB-SLAM2 forgets them.
@@ -192,7 +186,7 @@ SlamRunResult RunMutualLoop(const TumSequence& sequence, const SlamRunOptions& o
   if (score) {
     loop_scores.raw = raw_scores.Scores();
     loop_scores.refined = refined_scores.Scores();
-    loop_scores.refine_ms_median = Median(result.refine_ms);
+    loop_scores.refine_ms_median = result.refine_ms.empty() ? 0 : Median(result.refine_ms);
     result.segmentation = std::move(loop_scores);
   }
   result.long_term_map = loop.tracker().ExportLongTermMap(false);
@@ -214,7 +208,7 @@ double SlamRunResult::LocalizedShare() const {
 double SlamRunResult::MedianTrackingMs() const {
   std::vector<double> times;
   for (const auto& frame : frames) times.push_back(frame.timings.TrackingMs());
-  return Median(std::move(times));
+  return times.empty() ? 0 : Median(std::move(times));
 }
 
 SlamRunResult RunSlamOnSequence(const TumSequence& sequence, const SlamRunOptions& options) {

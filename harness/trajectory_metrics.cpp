@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 
 #include "core/error.h"
+#include "core/statistics.h"
 
 namespace segslam::harness {
 namespace {
@@ -59,12 +60,6 @@ std::size_t FindClosestIndex(const std::vector<double>& sorted, double t) {
     }
   }
   return best;
-}
-
-double Median(std::vector<double> values) {
-  std::sort(values.begin(), values.end());
-  const std::size_t n = values.size();
-  return n % 2 == 1 ? values[n / 2] : (values[n / 2 - 1] + values[n / 2]) / 2;
 }
 
 double RotationAngle(const Eigen::Matrix3d& R) {

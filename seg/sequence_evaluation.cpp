@@ -12,6 +12,7 @@
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/instances.h"
+#include "core/statistics.h"
 #include "core/tracks.h"
 #include "core/tum_dataset.h"
 
@@ -157,9 +158,7 @@ SequenceSegEval EvaluateSequenceWithGroundTruthPoses(const SegEvalOptions& optio
   result.refined = refined_scores.Scores();
   result.raw_confident = raw_confident_scores.Scores();
   result.raw_confident_min_score = options.refiner.min_new_region_score;
-  std::sort(refine_ms.begin(), refine_ms.end());
-  const size_t n = refine_ms.size();
-  result.refine_ms_median = n == 0 ? 0 : n % 2 == 1 ? refine_ms[n / 2] : (refine_ms[n / 2 - 1] + refine_ms[n / 2]) / 2;
+  result.refine_ms_median = refine_ms.empty() ? 0 : Median(refine_ms);
   result.last_color_bgr = frame.color_bgr;
   result.last_gt_ids = gt_ids;
   result.last_initial = std::move(initial);
