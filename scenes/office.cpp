@@ -61,6 +61,7 @@ class OfficeBuilder {
     MakeDesks();
     MakeSitters();
     MakeClutter();
+    RecordSittersArmObstacles();
     MakeWalkers();
     MakeLights();
     RecordSecondPassChanges(&world_, candidates_);
@@ -251,6 +252,40 @@ class OfficeBuilder {
       Object& person = MakePerson(rng);
       person.articulation = Articulation::kSitter;
       for (Placement& p : person.placement) p.T_world_object = T;
+    }
+  }
+
+  // What each sitter's arms must keep out of in each pass, once every desk item and
+  // its pass-2 place are known: the boxes bounding every rigid geom within reach (the
+  // desk top, monitors, keyboards, items, the chair's arm rests), in the sitter's frame.
+  void RecordSittersArmObstacles() {
+    constexpr double kReachM = 1.0;  // from between the shoulders to a fingertip, largest body_scale
+    for (Object& sitter : world_.objects) {
+      if (sitter.articulation != Articulation::kSitter) continue;
+      for (int pass = 0; pass < 2; ++pass) {
+        Placement& seat = sitter.placement[pass];
+        seat.arm_obstacles.clear();
+        const Eigen::Isometry3d T_sitter_world = seat.T_world_object.inverse();
+        const Eigen::Vector3d shoulders(0, 0, 1.0);
+        for (const Object& o : world_.objects) {
+          const Placement& p = o.placement[pass];
+          if (o.articulation != Articulation::kRigid || !p.present || p.moving) continue;
+          for (const Part& part : o.parts) {
+            for (const Geom& g : part.geoms) {
+              if (g.shape == Shape::kPlane) continue;
+              Geom box = g;
+              box.shape = Shape::kBox;
+              box.T_parent_geom = T_sitter_world * p.T_world_object * g.T_parent_geom;
+              if (g.shape == Shape::kCylinder) box.size = Vec3(g.size.x(), g.size.x(), g.size.y());
+              if (g.shape == Shape::kCapsule) box.size = Vec3(g.size.x(), g.size.x(), g.size.y() + g.size.x());
+              if (g.shape == Shape::kSphere) box.size = Vec3::Constant(g.size.x());
+              if ((box.T_parent_geom.translation() - shoulders).norm() - box.size.norm() < kReachM) {
+                seat.arm_obstacles.push_back(box);
+              }
+            }
+          }
+        }
+      }
     }
   }
 

@@ -61,7 +61,73 @@ Eigen::Isometry3d Pose(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
   return T;
 }
 
+// The forearm's frame at the elbow, from the upper arm's frame at the shoulder.
+Eigen::Isometry3d ElbowPose(const Eigen::Isometry3d& T_shoulder, double elbow, double s) {
+  return T_shoulder * Pose(Ry(-elbow), Eigen::Vector3d(0, 0, -kBody.upper_arm * s));
+}
+
+// The hand: an ellipsoid below the wrist, in the forearm's frame (body_scale 1).
+const Eigen::Vector3d kHandHalfSize(0.03, 0.045, 0.08);
+double HandCentreZ() { return -kBody.forearm - 0.06; }
+
+// Distance from p to a box geom, negative inside (by the depth to its nearest face).
+double SignedDistanceToBox(const Geom& box, const Eigen::Vector3d& p_parent) {
+  const Eigen::Vector3d q = (box.T_parent_geom.inverse() * p_parent).cwiseAbs() - box.size;
+  const double inside = std::min(q.maxCoeff(), 0.0);
+  return q.cwiseMax(0.0).norm() + inside;
+}
+
+// True when the forearm and hand, posed at T_elbow, keep `margin_m` from every box:
+// their axis is sampled every centimetre or less, each sample with the limb's radius
+// there (the capsule's, then the hand's width tapering to its tip).
+bool ForearmClear(const Eigen::Isometry3d& T_elbow, double s, const std::vector<Geom>& boxes) {
+  constexpr double kMarginM = 0.003;
+  const double tip = HandCentreZ() - kHandHalfSize.z();
+  const int steps = static_cast<int>(std::ceil(-tip * s / 0.01));
+  for (int k = 0; k <= steps; ++k) {
+    const double z = tip * k / steps;  // body_scale 1
+    double radius = z >= -kBody.forearm ? kBody.forearm_r : 0.0;
+    const double u = (z - HandCentreZ()) / kHandHalfSize.z();
+    if (std::abs(u) < 1) radius = std::max(radius, kHandHalfSize.y() * std::sqrt(1 - u * u));
+    const Eigen::Vector3d p = T_elbow * Eigen::Vector3d(0, 0, z * s);
+    for (const Geom& box : boxes) {
+      if (SignedDistanceToBox(box, p) < radius * s + kMarginM) return false;
+    }
+  }
+  return true;
+}
+
 }  // namespace
+
+void KeepArmsClear(const std::vector<Geom>& boxes, double s, PersonJoints* joints) {
+  if (boxes.empty()) return;
+  constexpr double kDeg = M_PI / 180.0;
+  constexpr double kMostElbow = 160 * kDeg;  // the hand at the shoulder
+  const std::vector<Eigen::Isometry3d> poses = PersonPartPoses(*joints, s);
+  for (int side = 0; side < 2; ++side) {
+    const Eigen::Isometry3d& T_shoulder = poses[kUpperArmL + 2 * side];
+    auto clear = [&](double elbow) { return ForearmClear(ElbowPose(T_shoulder, elbow, s), s, boxes); };
+    double blocked = joints->elbow[side];
+    if (clear(blocked)) continue;
+    // Scan up in 4-degree steps to the first clear angle, then bisect the last step, so
+    // the forearm comes to rest where it first clears.
+    double free = blocked;
+    while (free < kMostElbow) {
+      free = std::min(kMostElbow, free + 4 * kDeg);
+      if (clear(free)) break;
+      blocked = free;
+    }
+    if (!clear(free)) {
+      joints->elbow[side] = kMostElbow;
+      continue;
+    }
+    for (int i = 0; i < 6; ++i) {  // to 0.06 degrees
+      const double mid = 0.5 * (blocked + free);
+      (clear(mid) ? free : blocked) = mid;
+    }
+    joints->elbow[side] = free;
+  }
+}
 
 std::vector<Part> MakePersonParts(const PersonLook& look, double s) {
   const Body& b = kBody;
@@ -98,8 +164,7 @@ std::vector<Part> MakePersonParts(const PersonLook& look, double s) {
     Part& lower = parts[kLowerArmL + 2 * side];
     lower.name = arm_names[2 * side + 1];
     lower.geoms.push_back(Limb(b.forearm_r, b.forearm, look.skin, s));
-    lower.geoms.push_back(MakeGeom(Shape::kEllipsoid, Eigen::Vector3d(0.03, 0.045, 0.08) * s,
-                                   Eigen::Vector3d(0, 0, -b.forearm - 0.06) * s, look.skin));
+    lower.geoms.push_back(MakeGeom(Shape::kEllipsoid, kHandHalfSize * s, Eigen::Vector3d(0, 0, HandCentreZ()) * s, look.skin));
   }
 
   // Legs: trousers and shoes.
@@ -187,8 +252,7 @@ std::vector<Eigen::Isometry3d> PersonPartPoses(const PersonJoints& j, double s) 
         T_obj_torso * Pose(Rx(y * j.shoulder_out[side]) * Ry(-j.shoulder[side]),
                            Eigen::Vector3d(0, y * b.shoulder_width, b.shoulder_height) * s);
     poses[kUpperArmL + 2 * side] = T_shoulder;
-    poses[kLowerArmL + 2 * side] =
-        T_shoulder * Pose(Ry(-j.elbow[side]), Eigen::Vector3d(0, 0, -b.upper_arm * s));
+    poses[kLowerArmL + 2 * side] = ElbowPose(T_shoulder, j.elbow[side], s);
 
     // Leg: hip flexion about y, the knee folds the shank backward. Legs hang from the
     // pelvis, not the torso, so leaning does not move the feet.

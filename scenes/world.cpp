@@ -202,6 +202,7 @@ std::vector<Eigen::Isometry3d> PartPosesAt(const Object& object, Pass pass, doub
     joints = WalkJoints(walked_m / stride_m + object.gait_phase_offset, walking ? 1.0 : 0.0);
   } else {
     joints = SitJoints(stamp_s, object.gait_phase_offset, object.animated);
+    KeepArmsClear(p.arm_obstacles, object.body_scale, &joints);
   }
   std::vector<Eigen::Isometry3d> poses = PersonPartPoses(joints, object.body_scale);
   for (Eigen::Isometry3d& T : poses) T = T_world_object * T;

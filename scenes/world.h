@@ -107,6 +107,9 @@ struct Placement {
   Eigen::Isometry3d T_world_object = Eigen::Isometry3d::Identity();
   bool moving = false;
   PathMotion path;  // used when moving
+  // Sitters: boxes (in the object frame) their arms keep out of in this pass: the desk
+  // and what stands on it, their chair; see KeepArmsClear() in scenes/person.h.
+  std::vector<Geom> arm_obstacles;
 };
 
 // An instance in the masks: a thing a segmenter should find (car, person, chair, tv...).

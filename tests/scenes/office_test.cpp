@@ -235,5 +235,79 @@ TEST(OfficeTest, InFrontWalkersStartInViewAsAPairNearTheLens) {
   EXPECT_GT(nearest_m, 0.5);
 }
 
+
+// How far a world point lies inside a box geom (> 0 inside, metres to its nearest face).
+double DepthInsideBox(const Geom& box, const Eigen::Isometry3d& T_world_box, const Eigen::Vector3d& p_w) {
+  const Eigen::Vector3d p = T_world_box.inverse() * p_w;
+  return (box.size - p.cwiseAbs()).minCoeff();
+}
+
+// Points on the surface of a person's arm geom (capsule or ellipsoid), world frame.
+std::vector<Eigen::Vector3d> SurfaceSamples(const Geom& g, const Eigen::Isometry3d& T_world_geom) {
+  std::vector<Eigen::Vector3d> samples;
+  for (int i = 0; i < 12; ++i) {
+    const double a = 2 * M_PI * i / 12;
+    const Eigen::Vector3d ring(std::cos(a), std::sin(a), 0);
+    if (g.shape == Shape::kCapsule) {
+      for (int k = 0; k <= 10; ++k) {
+        const double z = -g.size.y() + 2 * g.size.y() * k / 10;
+        samples.push_back(T_world_geom * (g.size.x() * ring + Eigen::Vector3d(0, 0, z)));
+      }
+      for (double end : {-1.0, 1.0}) {
+        samples.push_back(T_world_geom * Eigen::Vector3d(0, 0, end * (g.size.y() + g.size.x())));
+      }
+    } else {  // ellipsoid: rings at five heights
+      for (int k = -2; k <= 2; ++k) {
+        const double z = 0.45 * k, r = std::sqrt(1 - z * z);
+        samples.push_back(T_world_geom * g.size.cwiseProduct(Eigen::Vector3d(r * ring.x(), r * ring.y(), z)));
+      }
+    }
+  }
+  return samples;
+}
+
+// A seated person's arms stay out of the desk, its monitors, keyboards and mice: the
+// forearms rest on the desk or move above it, never through it.
+TEST(OfficeTest, SittersArmsStayOutOfTheDeskAndWhatStandsOnIt) {
+  for (const char* sitters : {"2", "3"}) {
+    Scenario s = LoadScenario(ScenarioPath("office_sitting_xyz.yaml"));
+    ApplyOverride(s, "office.people_sitting", sitters);
+    const World w = BuildWorld(s);
+    std::vector<std::pair<const Geom*, Eigen::Isometry3d>> obstacles;
+    for (const Object& o : w.objects) {
+      static const std::set<std::string> kOnTheDesk = {"dining table", "tv", "keyboard", "mouse"};
+      if (!kOnTheDesk.count(o.category_name) || !o.placement[0].present) continue;
+      for (const Part& part : o.parts) {
+        for (const Geom& g : part.geoms) {
+          if (g.shape == Shape::kBox) obstacles.push_back({&g, o.placement[0].T_world_object * g.T_parent_geom});
+        }
+      }
+    }
+    int samples = 0, inside = 0;
+    double deepest_m = 0;
+    for (const Object& o : w.objects) {
+      if (o.articulation != Articulation::kSitter) continue;
+      for (double t = 0; t < 20.0; t += 0.05) {
+        const std::vector<Eigen::Isometry3d> poses = PartPosesAt(o, Pass::kFirst, t);
+        double depth_m = 0;
+        for (std::size_t part = 0; part < o.parts.size(); ++part) {
+          if (o.parts[part].name.find("arm") == std::string::npos) continue;
+          for (const Geom& g : o.parts[part].geoms) {
+            for (const Eigen::Vector3d& p : SurfaceSamples(g, poses[part] * g.T_parent_geom)) {
+              for (const auto& [box, T_world_box] : obstacles) depth_m = std::max(depth_m, DepthInsideBox(*box, T_world_box, p));
+            }
+          }
+        }
+        ++samples;
+        inside += depth_m > 0.005;
+        deepest_m = std::max(deepest_m, depth_m);
+      }
+    }
+    ASSERT_GT(samples, 0);
+    EXPECT_EQ(inside, 0) << sitters << " sitters: arms more than 5 mm inside the desk or its things in " << inside
+                         << " of " << samples << " poses, at most " << deepest_m << " m deep";
+  }
+}
+
 }  // namespace
 }  // namespace segslam::scenes
