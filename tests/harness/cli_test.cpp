@@ -176,10 +176,24 @@ TEST_F(CliBadInputTest, InterruptLeavesNothingBehind) {
   ASSERT_GE(pid, 0);
   if (pid == 0) {
     ::freopen("/dev/null", "w", stderr);
-    ::execl(SEGSLAM_BINARY, SEGSLAM_BINARY, "generate", scenario.c_str(), "--out", out.c_str(),
-            "--quiet", static_cast<char*>(nullptr));
+    // --frames bounds the work should the child ever outlive the test.
+    ::execl(SEGSLAM_BINARY, SEGSLAM_BINARY, "generate", scenario.c_str(), "--out", out.c_str(), "--frames",
+            "400", "--quiet", static_cast<char*>(nullptr));
     ::_exit(127);
   }
+  // On every way out of this test (a failed ASSERT included) the child is stopped and
+  // reaped, so it never writes into dir_ after TearDown removed it.
+  bool reaped = false;
+  int status = 0;
+  struct ChildGuard {
+    pid_t pid;
+    bool& reaped;
+    ~ChildGuard() {
+      if (reaped) return;
+      ::kill(pid, SIGKILL);
+      ::waitpid(pid, nullptr, 0);
+    }
+  } guard{pid, reaped};
   // Wait until frames are being written (the staging directory has a pass1/rgb folder).
   auto staging_has_frames = [&] {
     for (const auto& entry : fs::directory_iterator(dir_)) {
@@ -193,8 +207,8 @@ TEST_F(CliBadInputTest, InterruptLeavesNothingBehind) {
   }
   ASSERT_TRUE(staging_has_frames()) << "generation never started writing frames";
   ::kill(pid, SIGINT);
-  int status = 0;
   ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  reaped = true;
   ASSERT_TRUE(WIFEXITED(status));
   EXPECT_EQ(WEXITSTATUS(status), 130);
   EXPECT_FALSE(fs::exists(out));

@@ -8,6 +8,8 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <fstream>
+#include <iterator>
 #include <map>
 
 #include <opencv2/imgproc.hpp>
@@ -216,8 +218,19 @@ TEST(LinePlotTest, RefusesMismatchedSeries) {
   EXPECT_THROW(DrawLinePlot(options, {0, 1}, {{"short", {1}, {}, {}}}), Error);
   EXPECT_THROW(DrawLinePlot(options, {0, 1}, {{"bars", {1, 2}, {0}, {}}}), Error);
   EXPECT_THROW(DrawLinePlot(options, {1, 0}, {{"decreasing x", {1, 2}, {}, {}}}), Error);
-  // NaN is "no value": the plot is drawn.
-  EXPECT_NO_THROW(DrawLinePlot(options, {0, 1, 2}, {{"hole", {1, std::nan(""), 2}, {}, {}}}));
+}
+
+// NaN is "no value" (a sweep point whose runs all failed): the line stops on either side
+// of it instead of joining its neighbours.
+TEST(LinePlotTest, NoValueLeavesAGapInTheLine) {
+  LinePlotOptions options;
+  options.markers = false;
+  const Figure joined = DrawLinePlot(options, {0, 1, 2}, {{"flat", {1, 1, 1}, {}, {}}});
+  const Figure hole = DrawLinePlot(options, {0, 1, 2}, {{"hole", {1, std::nan(""), 1}, {}, {}}});
+  for (const double x : {0.5, 1.5}) {
+    EXPECT_LT(ColorDistance(joined.image, Rounded(joined.axes.ToPixel(x, 1)), SeriesColor(0)), kNearColor) << x;
+    EXPECT_GT(ColorDistance(hole.image, Rounded(hole.axes.ToPixel(x, 1)), SeriesColor(0)), kNearColor) << x;
+  }
 }
 
 // ------------------------------------------------------------------ the tracker's feature records
@@ -529,10 +542,14 @@ TEST_F(SampleReportTest, EveryFigureInAReportWhoseImagesExist) {
   document.AddImage("figures/features.png", "Features kept and dropped on a moving object (cf. Fig. 6).");
   document.Write(out);
   EXPECT_TRUE(document.MissingImages(out).empty());
-  for (const char* name : {"report.md", "report.html", "figures/top_view.png", "figures/density_sweep.png",
-                           "figures/masks.png", "figures/features.png"}) {
+  std::ifstream html_file(out / "report.html");
+  const std::string html((std::istreambuf_iterator<char>(html_file)), std::istreambuf_iterator<char>());
+  for (const char* name : {"figures/top_view.png", "figures/density_sweep.png", "figures/masks.png",
+                           "figures/features.png"}) {
     EXPECT_TRUE(std::filesystem::is_regular_file(out / name)) << name;
+    EXPECT_NE(html.find(std::string("<img src=\"") + name + "\""), std::string::npos) << name << " not shown";
   }
+  EXPECT_TRUE(std::filesystem::is_regular_file(out / "report.md"));
 }
 
 }  // namespace

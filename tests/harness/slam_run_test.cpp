@@ -34,6 +34,12 @@ namespace fs = std::filesystem;
 
 const fs::path kDataDir = SEGSLAM_TEST_DATA_DIR;
 
+// A scratch path of this process: two ctest runs at once (two build folders) do not
+// write into each other's files.
+fs::path ScratchPath(const std::string& name) {
+  return fs::path(::testing::TempDir()) / ("slam_run_test_" + std::to_string(::getpid()) + "_" + name);
+}
+
 double PathLength(const std::vector<StampedPose>& poses) {
   double length = 0;
   for (size_t i = 1; i < poses.size(); ++i) {
@@ -159,15 +165,16 @@ TEST(SlamRunTest, MutualHalvesPlainErrorWhenAWalkerCoversTheView) {
   EXPECT_GE(detection.Precision(), 0.8);
 }
 
-// Walkers farther away: plain survives them (robust estimation rejects a minority of
-// moving features), and mutual must not be worse.
-TEST(SlamRunTest, MutualTracksAsWellAsPlainAmongDistantWalkers) {
+// The opening of walking_xyz (80 frames): the pair walks in front of the desk within
+// the first seconds and plain already follows them (0.12 m here); mutual holds.
+TEST(SlamRunTest, MutualHoldsThroughTheWalkingXyzOpening) {
   const fs::path dir = kDataDir / "office_seg" / "pass1";
   RequireDataset(dir);
   const Scored plain = RunAndScore(dir, slam::SlamMode::kPlain);
   const Scored mutual = RunAndScore(dir, slam::SlamMode::kMutual);
   EXPECT_EQ(mutual.run.LocalizedShare(), 1.0);
-  EXPECT_LE(mutual.ate.translation_m.rmse, 1.1 * plain.ate.translation_m.rmse + 0.001);
+  EXPECT_LT(mutual.ate.translation_m.rmse, 0.01);
+  EXPECT_LE(mutual.ate.translation_m.rmse, 0.5 * plain.ate.translation_m.rmse);
 }
 
 // The paper's second pass: pass 2 is relocalized on pass 1's long-term map and tracked
@@ -176,16 +183,16 @@ TEST(SlamRunTest, SecondPassLocalizesOnTheFirstPassMap) {
   const fs::path dataset = kDataDir / "city_static";
   RequireDataset(dataset / "pass2");
   const Scored pass1 = RunAndScore(dataset / "pass1", slam::SlamMode::kMutual);
-  const fs::path map_file = fs::path(::testing::TempDir()) / "slam_run_test_city.segslam";
+  const fs::path map_file = ScratchPath("city.segslam");
   slam::SaveLongTermMap(map_file, pass1.run.long_term_map);
   const Scored pass2 = RunAndScore(dataset / "pass2", slam::SlamMode::kMutual, map_file, pass1.ate.T_gt_est);
   fs::remove(map_file);
-  EXPECT_GE(pass2.run.LocalizedShare(), 0.95);
+  // A static city: every frame localizes, and pass 2 in pass 1's map frame is held to
+  // pass 1's own criterion (0.3 % of the route).
+  EXPECT_EQ(pass2.run.LocalizedShare(), 1.0);
   EXPECT_EQ(pass2.run.frames.front().status, slam::TrackingStatus::kRelocalized);
   const double route_m = PathLength(TumSequence::Open(dataset / "pass2").groundtruth());
-  EXPECT_LT(pass2.ate.translation_m.rmse, 0.01 * route_m);
-  // Localization never writes into the map it runs on.
-  EXPECT_EQ(pass2.run.long_term_map.points.size(), pass1.run.long_term_map.points.size());
+  EXPECT_LT(pass2.ate.translation_m.rmse, 0.003 * route_m);
 }
 
 TEST(SlamRunTest, MapFromAnotherCameraIsRefused) {
@@ -193,7 +200,7 @@ TEST(SlamRunTest, MapFromAnotherCameraIsRefused) {
   RequireDataset(dataset / "pass1");
   slam::LongTermMapData map;
   map.camera = PinholeCamera::FromVerticalFov(320, 240, 60);
-  const fs::path map_file = fs::path(::testing::TempDir()) / "slam_run_test_other_camera.segslam";
+  const fs::path map_file = ScratchPath("other_camera.segslam");
   slam::SaveLongTermMap(map_file, map);
   SlamRunOptions options;
   options.map_in = map_file;
@@ -349,7 +356,7 @@ TEST(SlamRunTest, FramesTrackedInADroppedMapCountAsLost) {
   const fs::path city = kDataDir / "city_static" / "pass1";
   RequireDataset(office);
   RequireDataset(city);
-  const fs::path copy = fs::path(::testing::TempDir()) / "slam_run_test_spliced";
+  const fs::path copy = ScratchPath("spliced");
   fs::remove_all(copy);
   fs::copy(office, copy, fs::copy_options::recursive);
   const TumSequence spliced_layout = TumSequence::Open(copy);
@@ -397,7 +404,7 @@ TEST(SlamRunTest, FramesTrackedInADroppedMapCountAsLost) {
 TEST(SlamRunTest, UnreadableFrameStopsTheRunNamingTheFile) {
   const fs::path source = kDataDir / "office_clean" / "pass1";
   RequireDataset(source);
-  const fs::path copy = fs::path(::testing::TempDir()) / "slam_run_test_unreadable_frame";
+  const fs::path copy = ScratchPath("unreadable_frame");
   fs::remove_all(copy);
   fs::copy(source, copy, fs::copy_options::recursive);
   const TumSequence sequence = TumSequence::Open(copy);

@@ -10,13 +10,16 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <map>
 
 #include <unistd.h>
 
 #include "core/image_io.h"
 #include "core/json_file.h"
 #include "core/tum_dataset.h"
+#include "mutual/mutual_loop.h"
 #include "seg/external_masks.h"
+#include "seg/simulated_segmenter.h"
 
 namespace segslam::harness {
 namespace {
@@ -84,7 +87,8 @@ TEST(MutualLoopDatasetTest, CityRefinementBeatsRawMasks) {
 }
 
 // The refined masks are written in the external-mask layout: a later run reads them back
-// with --masks, as any external segmenter's.
+// with --masks, as any external segmenter's. What is read back is, pixel for pixel and
+// with its categories, what the loop refined (the same loop run here on its own).
 TEST(MutualLoopDatasetTest, RefinedMasksReadBackAsExternalMasks) {
   const fs::path dir = kDataDir / "office_seg" / "pass1";
   RequireDataset(dir);
@@ -96,13 +100,27 @@ TEST(MutualLoopDatasetTest, RefinedMasksReadBackAsExternalMasks) {
   // external-mask parsers rather than through ExternalMaskSegmenter (which wants every frame).
   const TumSequence sequence = TumSequence::Open(dir);
   const cv::Size size(sequence.camera().intrinsics.width, sequence.camera().intrinsics.height);
+  seg::SimulatedSegmenter segmenter(dir, seg::SimulatedSegmenterOptions::Preset("fcis-like"), 1, "fcis-like");
+  mutual::MutualLoop loop(sequence.camera().intrinsics, segmenter);
   for (int i = 0; i < kFrames; ++i) {
+    RgbdFrame frame = sequence.LoadFrame(static_cast<size_t>(i));
+    frame.index = i;
+    const seg::FrameSegmentation refined = loop.ProcessFrame(frame).refined;
     const std::string stem = fs::path(sequence.entries()[static_cast<size_t>(i)].rgb_file).stem().string();
     const fs::path table_path = out / (stem + ".json");
     const auto table = seg::ParseExternalMaskTable(ReadJsonFile(table_path), table_path.string());
     const seg::FrameSegmentation masks = seg::ExternalMasksToSegmentation(
         ReadInstanceMask(out / (stem + ".png")), table, size, i, (out / (stem + ".png")).string());
-    EXPECT_FALSE(masks.instances.empty()) << "frame " << i;
+    ASSERT_FALSE(masks.instances.empty()) << "frame " << i;
+    std::map<int, int> categories_read, categories_refined;
+    for (const seg::InstanceMask& m : masks.instances) categories_read[m.track_id] = m.category_id;
+    // The layout holds one id per pixel: a region that others cover entirely is not in it.
+    const cv::Mat refined_ids = refined.ToIdImage(size);
+    EXPECT_EQ(cv::countNonZero(masks.ToIdImage(size) != refined_ids), 0) << "frame " << i;
+    for (const seg::InstanceMask& m : refined.instances) {
+      if (cv::countNonZero(refined_ids == m.track_id) > 0) categories_refined[m.track_id] = m.category_id;
+    }
+    EXPECT_EQ(categories_read, categories_refined) << "frame " << i;
   }
   fs::remove_all(out);
 }

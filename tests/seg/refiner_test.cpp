@@ -286,6 +286,32 @@ TEST(SegmentationRefinerTest, RepairsKeepsCarriesIdsAndAddsMissed) {
   EXPECT_EQ(Differences(r.refined.instances[2].mask, RectMask(scene.person_b)), 0);
 }
 
+// Refine() projects the previous regions by T_cur_prev = T_wc_current_coarse^-1 *
+// T_wc_previous_fine: with the camera 0.1 m to the left of where it was (the scene 2 m
+// ahead moves 25 px right), on a base pose with a rotation so that a reversed product
+// would move the regions elsewhere, the missed person B is added 25 px to the right.
+TEST(SegmentationRefinerTest, RegionsFollowTheCameraMotionBetweenThePoses) {
+  const Scene scene;
+  const cv::Point shift(25, 0);
+  FrameSegmentation current;
+  current.instances.push_back(Instance(1, 62, RectMask(scene.chair + shift), 0.85f));
+  current.instances.push_back(Instance(2, 1, RectMask(scene.person_a + shift), 0.95f));
+  RefinerInput in = scene.Input(current);
+  Eigen::Isometry3d base = Translation(3, -1, 0.5);
+  base.linear() = Eigen::AngleAxisd(0.7, Eigen::Vector3d(0.2, 1, 0.1).normalized()).toRotationMatrix();
+  in.T_wc_previous_fine = base;
+  in.T_wc_current_coarse = base * Translation(-0.1, 0, 0);
+  SegmentationRefiner refiner;
+  const RefinementResult r = refiner.Refine(in);
+  SCOPED_TRACE(r.BriefReport());
+  ASSERT_EQ(r.refined.instances.size(), 3u);
+  EXPECT_EQ(r.refined.instances[0].track_id, 7);
+  EXPECT_EQ(r.refined.instances[1].track_id, 5);
+  EXPECT_EQ(r.refined.instances[2].track_id, 9);
+  EXPECT_EQ(r.decisions[2].kind, RegionDecision::Kind::kAdded);
+  EXPECT_EQ(Differences(r.refined.instances[2].mask, RectMask(scene.person_b + shift)), 0);
+}
+
 // A new region scoring under min_new_region_score is dropped without a track id, so a
 // long run of weak detections cannot use the 65534 ids up.
 TEST(SegmentationRefinerTest, DroppedNewRegionsTakeNoTrackId) {

@@ -5,9 +5,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <optional>
+#include <tuple>
 #include <vector>
 
 #include "core/error.h"
@@ -300,6 +302,19 @@ TEST(TrackerTest, LocalizesOnALoadedLongTermMapWithoutChangingIt) {
     EXPECT_LT(PositionError(result.T_wc, truth), 0.01) << "frame " << i;
   }
   EXPECT_EQ(localizer.ExportLongTermMap(true).points.size(), map.points.size());
+  // The map's points, as the tracker holds them, are those loaded: none culled, none
+  // moved by bundle adjustment, no descriptor replaced.
+  auto as_key = [](const Eigen::Vector3d& p, const OrbDescriptor& d) {
+    return std::make_tuple(p.x(), p.y(), p.z(), d);
+  };
+  std::vector<decltype(as_key(Eigen::Vector3d(), OrbDescriptor{}))> loaded, held;
+  for (const StoredMapPoint& p : map.points) loaded.push_back(as_key(p.position_w, p.descriptor));
+  for (const auto& p : localizer.map().points()) {
+    if (p->fixed && !p->bad) held.push_back(as_key(p->position_w, p->descriptor));
+  }
+  std::sort(loaded.begin(), loaded.end());
+  std::sort(held.begin(), held.end());
+  EXPECT_TRUE(held == loaded) << held.size() << " fixed points held, " << loaded.size() << " loaded";
 }
 
 // The points a localization run adds to its own tracking map are culled as a mapping
