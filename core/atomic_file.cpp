@@ -1,5 +1,6 @@
 #include "core/atomic_file.h"
 
+#include <fcntl.h>  // AT_FDCWD
 #include <unistd.h>
 
 #include <cerrno>
@@ -56,7 +57,8 @@ void WriteImageAtomically(const std::filesystem::path& path, const cv::Mat& imag
   WriteBytesAtomically(path, buffer.data(), buffer.size());
 }
 
-StagingDirectory::StagingDirectory(std::filesystem::path target, bool overwrite) : target_(std::move(target)) {
+StagingDirectory::StagingDirectory(std::filesystem::path target, bool overwrite)
+    : target_(std::move(target)), overwrite_(overwrite) {
   namespace fs = std::filesystem;
   if (target_.filename().empty()) target_ = target_.parent_path();
   if (fs::exists(target_) && !overwrite) {
@@ -82,6 +84,31 @@ StagingDirectory::~StagingDirectory() {
 
 void StagingDirectory::Commit() {
   namespace fs = std::filesystem;
+  if (!overwrite_) {
+    // The constructor's check is long past: another run may have made the target since.
+    // RENAME_NOREPLACE refuses atomically instead of replacing that run's output.
+    int result = ::renameat2(AT_FDCWD, staging_.c_str(), AT_FDCWD, target_.c_str(), RENAME_NOREPLACE);
+    if (result != 0 && errno == EINVAL) {
+      // A file system without RENAME_NOREPLACE (e.g. NFS): check, then rename; that
+      // leaves a short window for a race, not one as long as the whole run.
+      std::error_code ignored;
+      if (fs::exists(target_, ignored)) {
+        errno = EEXIST;
+      } else {
+        result = std::rename(staging_.c_str(), target_.c_str());
+      }
+    }
+    if (result != 0) {
+      const int saved_errno = errno;
+      if (saved_errno == EEXIST) {
+        throw FileError(target_, "already exists (made while this output was being written, perhaps by another "
+                                 "run); left as it is (use --force to replace it)");
+      }
+      throw FileError(target_, std::string("cannot move the finished output here: ") + std::strerror(saved_errno));
+    }
+    committed_ = true;
+    return;
+  }
   std::error_code error;
   fs::path old;
   if (fs::exists(target_)) {
@@ -90,7 +117,12 @@ void StagingDirectory::Commit() {
     if (error) throw FileError(target_, "cannot replace: " + error.message());
   }
   fs::rename(staging_, target_, error);
-  if (error) throw FileError(target_, "cannot move the finished output here: " + error.message());
+  if (error) {
+    // Put the previous output back rather than leave it under a hidden name.
+    std::error_code ignored;
+    if (!old.empty()) fs::rename(old, target_, ignored);
+    throw FileError(target_, "cannot move the finished output here: " + error.message());
+  }
   committed_ = true;
   if (!old.empty()) fs::remove_all(old, error);
 }

@@ -42,11 +42,15 @@ class StagingDirectory {
   // Where to write the output until Commit().
   const std::filesystem::path& path() const { return staging_; }
 
-  // Moves the finished directory to its target, replacing an old one if present.
+  // Moves the finished directory to its target. With `overwrite`, an old one is replaced
+  // (and put back if the move fails). Without, a target that appeared since the
+  // constructor (e.g. made by a concurrent run) is left alone: throws segslam::Error
+  // naming it, and the staging directory stays until destruction.
   void Commit();
 
  private:
   std::filesystem::path target_;
+  bool overwrite_ = false;
   std::filesystem::path staging_;
   bool committed_ = false;
 };

@@ -138,7 +138,11 @@ cv::Mat CocoPolygonsToMask(const std::vector<std::vector<double>>& polygons, cv:
         const double ya = xy[2 * a + 1], yb = xy[2 * b + 1];
         // Half-open in y, so a corner on the scan line is crossed once, not twice.
         if ((ya <= y && y < yb) || (yb <= y && y < ya)) {
-          crossings.push_back(xy[2 * a] + (y - ya) / (yb - ya) * (xy[2 * b] - xy[2 * a]));
+          const double x = xy[2 * a] + (y - ya) / (yb - ya) * (xy[2 * b] - xy[2 * a]);
+          // Clamped so that the int conversions below cannot overflow (JSON allows 3e9 or
+          // 1e300); -1 and width + 1 lie beyond every column, which is all that matters.
+          // max(-1, x) first: it also turns a NaN (0 * inf, from corners near 1e308) into -1.
+          crossings.push_back(std::min(std::max(-1.0, x), size.width + 1.0));
         }
       }
       std::sort(crossings.begin(), crossings.end());

@@ -1,10 +1,11 @@
 #include "core/option_assignment.h"
 
+#include <cctype>
 #include <cmath>
 #include <limits>
-#include <stdexcept>
 
 #include "core/error.h"
+#include "core/pose.h"
 
 namespace segslam {
 
@@ -14,18 +15,18 @@ NumericAssignment ParseNumericAssignment(const std::string& assignment, const st
   NumericAssignment parsed;
   parsed.name = assignment.substr(0, eq);
   parsed.text = assignment.substr(eq + 1);
-  try {
-    std::size_t used = 0;
-    parsed.value = std::stod(parsed.text, &used);
-    if (used != parsed.text.size()) throw std::invalid_argument(parsed.text);
-  } catch (const std::exception&) {
+  // ParseTumNumber refuses NaN, inf, hex and trailing characters, but strtod beneath it
+  // skips leading white space: refuse that here, so " 5" is not silently 5.
+  if (parsed.text.empty() || std::isspace(static_cast<unsigned char>(parsed.text.front())) ||
+      !ParseTumNumber(parsed.text, &parsed.value)) {
     throw Error(what + " " + parsed.name + ": not a number: '" + parsed.text + "'");
   }
   return parsed;
 }
 
 int WholeNumberValue(const NumericAssignment& parsed, const std::string& what) {
-  if (parsed.value != std::floor(parsed.value) || std::abs(parsed.value) > std::numeric_limits<int>::max()) {
+  if (parsed.value != std::floor(parsed.value) || parsed.value < std::numeric_limits<int>::min() ||
+      parsed.value > std::numeric_limits<int>::max()) {
     throw Error(what + " " + parsed.name + ": not a whole number: '" + parsed.text + "'");
   }
   return static_cast<int>(parsed.value);

@@ -17,13 +17,14 @@ struct NumericAssignment {
   double value = 0;
 };
 
-// Splits "name=value" and parses the value as a whole number string (no trailing
-// characters). Throws segslam::Error "<what>: expected NAME=VALUE, got '<assignment>'" or
-// "<what> <name>: not a number: '<value>'".
+// Splits "name=value" and parses all of the value as a finite number in decimal or
+// scientific notation (as ParseTumNumber in core/pose.h: no NaN, inf, hex, white space
+// or trailing characters). Throws segslam::Error "<what>: expected NAME=VALUE, got
+// '<assignment>'" or "<what> <name>: not a number: '<value>'".
 NumericAssignment ParseNumericAssignment(const std::string& assignment, const std::string& what);
 
 // The value of an integer or boolean option. Throw segslam::Error "<what> <name>: not a
-// whole number" or "<what> <name>: expected 0 or 1".
+// whole number" (also outside int's range) or "<what> <name>: expected 0 or 1".
 int WholeNumberValue(const NumericAssignment& parsed, const std::string& what);
 bool ZeroOrOneValue(const NumericAssignment& parsed, const std::string& what);
 

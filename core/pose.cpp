@@ -119,8 +119,22 @@ void WriteTumTrajectory(const std::filesystem::path& path,
     std::istringstream lines(header_comment);
     for (std::string line; std::getline(lines, line);) text += "# " + line + "\n";
   }
-  for (const StampedPose& pose : poses) {
-    text += FormatTumPoseLine(pose);
+  // Refuse what ReadTumTrajectory would refuse, so a file this writes always reads back.
+  std::string previous_stamp;
+  for (size_t i = 0; i < poses.size(); ++i) {
+    const StampedPose& pose = poses[i];
+    if (!std::isfinite(pose.stamp_s) || !pose.T_wc.matrix().allFinite()) {
+      throw FileError(path, fmt::format("refusing to write pose {} (stamp {}): not finite", i, pose.stamp_s));
+    }
+    // Compared as written (%.6f): stamps less than 1 us apart would read back as equal.
+    const std::string line = FormatTumPoseLine(pose);
+    const std::string stamp = line.substr(0, line.find(' '));
+    if (i > 0 && !(std::stod(stamp) > std::stod(previous_stamp))) {
+      throw FileError(path, fmt::format("refusing to write pose {}: timestamp {} does not increase (previous {})", i,
+                                        stamp, previous_stamp));
+    }
+    previous_stamp = stamp;
+    text += line;
     text += '\n';
   }
   WriteFileAtomically(path, text);

@@ -51,7 +51,9 @@ StampedPose ParseTumPoseLine(const std::string& line, const std::string& origin_
 std::vector<StampedPose> ReadTumTrajectory(const std::filesystem::path& path);
 
 // Writes a TUM trajectory atomically (temporary file, then rename). `header_comment` may
-// hold several lines; each is written prefixed by "# ". Throws segslam::Error on failure.
+// hold several lines; each is written prefixed by "# ". Throws segslam::Error naming the
+// file (and the pose's index) on a non-finite stamp or pose, a stamp that does not
+// increase as written (to the microsecond), or a failed write; nothing is written then.
 void WriteTumTrajectory(const std::filesystem::path& path,
                         const std::vector<StampedPose>& poses,
                         const std::string& header_comment = "");

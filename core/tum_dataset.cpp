@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <set>
 #include <sstream>
 #include <tuple>
 
@@ -58,22 +59,22 @@ bool SequenceCamera::IsValid(std::string* error) const {
   return distortion.IsValid(error);
 }
 
-SequenceCamera ReadCameraYaml(const std::filesystem::path& path) {
-  if (!std::filesystem::exists(path)) throw FileError(path, "file does not exist");
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(path.string());
-  } catch (const YAML::Exception& e) {
-    throw FileError(path, std::string("malformed YAML: ") + e.what());
-  }
+namespace {
+
+SequenceCamera CameraFromYaml(const YAML::Node& root, const std::filesystem::path& path) {
   if (!root.IsMap()) throw FileError(path, "expected a map of camera keys");
+  std::set<std::string> seen;
   for (const auto& item : root) {
-    const std::string key = item.first.as<std::string>();
+    const int line = item.first.Mark().line + 1;
+    if (!item.first.IsScalar()) throw FileError(path, fmt::format("line {}: a key must be a plain name", line));
+    const std::string& key = item.first.Scalar();
     if (std::find(std::begin(kCameraKeys), std::end(kCameraKeys), key) == std::end(kCameraKeys)) {
       throw FileError(path, "unknown key '" + key +
                                 "' (expected width, height, fx, fy, cx, cy, depth_factor, and "
                                 "optionally k1, k2, p1, p2, k3)");
     }
+    // yaml-cpp keeps both, and root[key] would quietly take the first.
+    if (!seen.insert(key).second) throw FileError(path, fmt::format("line {}: duplicate key '{}'", line, key));
   }
   auto get_double = [&](const char* key) {
     const YAML::Node node = root[key];
@@ -107,6 +108,19 @@ SequenceCamera ReadCameraYaml(const std::filesystem::path& path) {
   return camera;
 }
 
+}  // namespace
+
+SequenceCamera ReadCameraYaml(const std::filesystem::path& path) {
+  if (!std::filesystem::exists(path)) throw FileError(path, "file does not exist");
+  // Around the whole read: yaml-cpp throws from conversions too, not only from parsing,
+  // and its exceptions would reach the CLI as an internal error without the file's name.
+  try {
+    return CameraFromYaml(YAML::LoadFile(path.string()), path);
+  } catch (const YAML::Exception& e) {
+    throw FileError(path, std::string("malformed YAML: ") + e.what());
+  }
+}
+
 void WriteCameraYaml(const std::filesystem::path& path, const SequenceCamera& camera) {
   std::string error;
   if (!camera.IsValid(&error)) throw FileError(path, "refusing to write invalid camera: " + error);
@@ -128,8 +142,8 @@ void WriteCameraYaml(const std::filesystem::path& path, const SequenceCamera& ca
 
 std::optional<SequenceCamera> TumDefaultCamera(const std::string& sequence_name) {
   // Published calibrations of the colour cameras from the TUM RGB-D "file formats" page,
-  // d0..d4 being OpenCV's k1, k2, p1, p2, k3 (ROS default intrinsics for freiburg3, whose
-  // images are already undistorted).
+  // d0..d4 being OpenCV's k1, k2, p1, p2, k3 (freiburg3: TUM's own calibration, no
+  // distortion, as its images are already undistorted).
   struct Known {
     const char* tag;
     double fx, fy, cx, cy;
@@ -444,15 +458,17 @@ void TumSequenceWriter::Finish() {
     depth += fmt::format("{} depth/{}.png\n", name, name);
     associations += fmt::format("{0} rgb/{0}.png {0} depth/{0}.png\n", name);
   }
-  // Images were written by Add(); only now do lists name them, so an interrupted run
-  // leaves a folder that TumSequence::Open refuses rather than a short "complete" one.
-  WriteFileAtomically(dir_ / "rgb.txt", rgb);
-  WriteFileAtomically(dir_ / "depth.txt", depth);
-  WriteFileAtomically(dir_ / "associations.txt", associations);
+  // TumSequence::Open accepts a folder once it has a frame list, and then needs neither
+  // camera.yaml nor groundtruth.txt: write those first and the lists last, so an
+  // interrupted run leaves a folder Open refuses rather than one without its camera or
+  // ground truth. associations.txt, which Open reads in preference, comes last of all.
+  WriteCameraYaml(dir_ / "camera.yaml", camera_);
   WriteTumTrajectory(dir_ / "groundtruth.txt", poses_,
                      "ground truth trajectory (camera-to-world T_wc, written by segslam)\n"
                      "timestamp tx ty tz qx qy qz qw");
-  WriteCameraYaml(dir_ / "camera.yaml", camera_);
+  WriteFileAtomically(dir_ / "rgb.txt", rgb);
+  WriteFileAtomically(dir_ / "depth.txt", depth);
+  WriteFileAtomically(dir_ / "associations.txt", associations);
   finished_ = true;
 }
 

@@ -128,8 +128,8 @@ class TumSequence {
 };
 
 // Writes a sequence in the TUM layout. Add() per frame, then Finish(); until Finish()
-// there are images but no lists, so a crashed run does not look like a complete
-// sequence. Not copyable; use from one thread.
+// there are images but no frame lists, and Finish() writes the lists last, so a crashed
+// run does not look like a complete sequence. Not copyable; use from one thread.
 class TumSequenceWriter {
  public:
   // Creates dir, dir/rgb and dir/depth (throws on failure or an invalid camera).
@@ -149,8 +149,10 @@ class TumSequenceWriter {
   // not increase.
   void AddEntry(double stamp_s, const Eigen::Isometry3d& T_wc);
 
-  // Writes rgb.txt, depth.txt, associations.txt, groundtruth.txt and camera.yaml, each
-  // atomically. Throws on failure. Add() after Finish() throws.
+  // Writes camera.yaml, groundtruth.txt, then the frame lists rgb.txt, depth.txt and
+  // associations.txt, each atomically: TumSequence::Open accepts the folder only once a
+  // list is there, and by then so is everything else. Throws on failure. Add() after
+  // Finish() throws.
   void Finish();
 
   std::filesystem::path RgbPath(double stamp_s) const;    // dir/rgb/<stamp>.png

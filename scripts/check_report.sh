@@ -3,8 +3,8 @@
 #   scripts/check_report.sh REPORT_DIR [SCREENSHOT.png]
 # Renders REPORT_DIR/report.html with headless Chromium (installed from Debian's
 # `chromium` package if missing, as scripts/install_deps.sh installs packages), writes a
-# full-page screenshot (default REPORT_DIR/report_screenshot.png), and fails unless the
-# screenshot exists and every <img> of the page loaded (naturalWidth > 0).
+# screenshot of its top 1280x4000 pixels (default REPORT_DIR/report_screenshot.png), and
+# fails unless the screenshot exists and every <img> of the page loaded (naturalWidth > 0).
 set -euo pipefail
 
 if [ $# -lt 1 ] || [ $# -gt 2 ]; then
@@ -28,7 +28,8 @@ if [ -z "$browser" ]; then
   if [ "$(id -u)" -ne 0 ]; then sudo_cmd=(sudo); fi
   echo "check_report: installing chromium"
   "${sudo_cmd[@]}" apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends chromium
+  # Through env: sudo resets the environment, so a variable set before it would be lost.
+  "${sudo_cmd[@]}" env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends chromium
   browser=chromium
 fi
 
@@ -49,7 +50,8 @@ run_browser() {
   }
 }
 
-# 1. The screenshot: the page's own height, so every picture is in it.
+# 1. The screenshot: headless Chromium captures the window, not the whole page, so a
+# report longer than 4000 px is cut off here; step 2 checks every picture regardless.
 rm -f "$screenshot"
 run_browser --screenshot="$screenshot" --window-size=1280,4000 "file://$page" >/dev/null
 if [ ! -s "$screenshot" ]; then
@@ -70,14 +72,13 @@ window.addEventListener("load", function () {
   document.body.appendChild(result);
 });
 </script>'
-python3 - "$page" "$probe" "$probe_script" <<'EOF'
-import sys
-page, probe, script = sys.argv[1], sys.argv[2], sys.argv[3]
-html = open(page, encoding="utf-8").read()
-at = html.rfind("</body>")
-html = html[:at] + script + html[at:] if at >= 0 else html + script
-open(probe, "w", encoding="utf-8").write(html)
-EOF
+# The script goes before the page's last </body> (at its end if it has none).
+body_end=$(grep -abo '</body>' "$page" | tail -n 1 | cut -d: -f1 || true)
+if [ -n "$body_end" ]; then
+  { head -c "$body_end" "$page"; printf '%s' "$probe_script"; tail -c +"$((body_end + 1))" "$page"; } >"$probe"
+else
+  { cat "$page"; printf '%s' "$probe_script"; } >"$probe"
+fi
 dom=$(run_browser --dump-dom --virtual-time-budget=10000 "file://$probe")
 result=$(printf '%s\n' "$dom" | grep -o 'images=[0-9]* broken=[0-9]*[^<]*' || true)
 if [ -z "$result" ]; then

@@ -114,5 +114,38 @@ TEST_F(AtomicFileTest, StagingDirectoryAppearsOnlyWhenCommitted) {
   EXPECT_EQ(CountFiles(dir()), 1u);  // no staging or old folder left
 }
 
+// Without overwrite, a target that appears after the constructor's check (a concurrent
+// run without --force) is neither replaced nor deleted, and the staged output survives
+// the refusal.
+TEST_F(AtomicFileTest, StagingCommitWithoutOverwriteRefusesATargetMadeSinceConstruction) {
+  const auto target = dir() / "out";
+  StagingDirectory staging(target, false);
+  WriteFileAtomically(staging.path() / "b.txt", "this run");
+  std::filesystem::create_directory(target);
+  WriteFileAtomically(target / "a.txt", "other run");
+
+  const std::string refused = testing::ErrorMessage([&] { staging.Commit(); });
+  EXPECT_NE(refused.find(target.string() + ": already exists"), std::string::npos) << refused;
+  EXPECT_NE(refused.find("--force"), std::string::npos) << refused;
+  EXPECT_EQ(ReadAll(target / "a.txt"), "other run");
+  EXPECT_FALSE(std::filesystem::exists(target / "b.txt"));
+  EXPECT_EQ(ReadAll(staging.path() / "b.txt"), "this run");
+}
+
+// With overwrite, a failed move of the new output puts the old one back under its name
+// instead of leaving it only under a hidden ".old" name.
+TEST_F(AtomicFileTest, StagingCommitPutsTheOldOutputBackWhenTheMoveFails) {
+  const auto target = dir() / "out";
+  std::filesystem::create_directory(target);
+  WriteFileAtomically(target / "a.txt", "previous");
+  StagingDirectory staging(target, true);
+  std::filesystem::remove_all(staging.path());  // makes the second rename fail
+
+  const std::string message = testing::ErrorMessage([&] { staging.Commit(); });
+  EXPECT_NE(message.find(target.string() + ": cannot move the finished output here"), std::string::npos) << message;
+  EXPECT_EQ(ReadAll(target / "a.txt"), "previous");
+  EXPECT_EQ(CountFiles(dir()), 1u);  // no hidden ".old" folder left
+}
+
 }  // namespace
 }  // namespace segslam

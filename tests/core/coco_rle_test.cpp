@@ -124,6 +124,28 @@ TEST(CocoPolygonTest, SeveralPolygonsAreAUnion) {
   EXPECT_EQ(mask.at<std::uint8_t>(2, 3), 1);  // in both
 }
 
+// Coordinates far beyond int (valid JSON numbers) used to overflow the conversion of the
+// crossings to columns, undefined behaviour that on x86 filled whole rows.
+TEST(CocoPolygonTest, HugeCoordinatesGiveTheMaskOfThePartInTheImage) {
+  // The triangle (0, 0), (3e9, 0), (0, 10) covers all 8 columns of rows 0..9 (its
+  // slanted edge crosses row 9's centre line at x = 1.5e8).
+  const cv::Mat triangle = CocoPolygonsToMask({{0, 0, 3e9, 0, 0, 10}}, cv::Size(8, 12), "t");
+  cv::Mat expected(12, 8, CV_8UC1, cv::Scalar(0));
+  expected.rowRange(0, 10).setTo(1);
+  EXPECT_EQ(cv::countNonZero(triangle != expected), 0) << triangle;
+
+  // Entirely right of or left of the image: nothing.
+  EXPECT_EQ(cv::countNonZero(CocoPolygonsToMask({{3e9, 0, 4e9, 0, 4e9, 10, 3e9, 10}}, cv::Size(8, 12), "t")), 0);
+  EXPECT_EQ(cv::countNonZero(CocoPolygonsToMask({{-4e9, 0, -3e9, 0, -3e9, 10, -4e9, 10}}, cv::Size(8, 12), "t")),
+            0);
+  // Corners near the largest double: row 0's crossing of the first edge is 0 * inf, NaN;
+  // the rows below cross it at +inf. The triangle's tip lies on row 0's centre line.
+  const cv::Mat extreme = CocoPolygonsToMask({{-1e308, 0.5, 1e308, 1e308, -1e308, 1e308}}, cv::Size(8, 12), "t");
+  expected.setTo(1);
+  expected.row(0).setTo(0);
+  EXPECT_EQ(cv::countNonZero(extreme != expected), 0) << extreme;
+}
+
 TEST(CocoSegmentationTest, DecodesEveryEncoding) {
   cv::Mat mask(6, 5, CV_8UC1, cv::Scalar(0));
   mask(cv::Rect(1, 2, 3, 3)).setTo(1);

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -101,6 +102,36 @@ TEST_F(TumTrajectoryTest, WriteReadRoundTrip) {
   std::string first;
   std::getline(file, first);
   EXPECT_EQ(first, "# a header");
+}
+
+// What ReadTumTrajectory refuses is not written: each case names the file and the pose.
+TEST_F(TumTrajectoryTest, WriteRefusesNonFinitePosesAndStampsThatDoNotIncrease) {
+  const auto path = dir() / "out.txt";
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  auto poses_with = [](int index, StampedPose bad) {
+    std::vector<StampedPose> poses;
+    for (int i = 0; i < 3; ++i) poses.push_back({1.0 + i, Eigen::Isometry3d::Identity()});
+    poses[index] = bad;
+    return poses;
+  };
+  StampedPose nan_translation{2.0, Eigen::Isometry3d::Identity()};
+  nan_translation.T_wc.translation().x() = nan;
+  StampedPose nan_rotation{2.0, Eigen::Isometry3d::Identity()};
+  nan_rotation.T_wc.linear()(0, 0) = nan;
+  const std::vector<std::pair<std::vector<StampedPose>, std::string>> cases = {
+      {poses_with(1, nan_translation), "pose 1 (stamp 2): not finite"},
+      {poses_with(1, nan_rotation), "pose 1 (stamp 2): not finite"},
+      {poses_with(2, {nan, Eigen::Isometry3d::Identity()}), "pose 2 (stamp nan): not finite"},
+      {poses_with(2, {2.0, Eigen::Isometry3d::Identity()}), "pose 2: timestamp 2.000000 does not increase"},
+      // Apart by less than the written microsecond: the file would hold the same stamp twice.
+      {poses_with(2, {2.0000004, Eigen::Isometry3d::Identity()}), "pose 2: timestamp 2.000000 does not increase"},
+  };
+  for (const auto& [poses, expected] : cases) {
+    SCOPED_TRACE(expected);
+    const std::string message = ErrorMessage([&] { WriteTumTrajectory(path, poses); });
+    EXPECT_NE(message.find(path.string() + ": refusing to write " + expected), std::string::npos) << message;
+    EXPECT_FALSE(std::filesystem::exists(path));
+  }
 }
 
 TEST_F(TumTrajectoryTest, SkipsCommentsAndBlankLines) {

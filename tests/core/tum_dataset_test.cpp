@@ -1,5 +1,7 @@
 #include "core/tum_dataset.h"
 
+#include <unistd.h>
+
 #include <fstream>
 #include <iterator>
 #include <optional>
@@ -136,6 +138,42 @@ TEST(AssociateByTimestamp, PairsJustUnderTheLimitAtLargeStamps) {
   ASSERT_LT(std::abs(rgb[0].first - depth[0].first), 0.02);
   EXPECT_EQ(AssociateByTimestamp(rgb, depth, 0.02).size(), 1u);
   EXPECT_EQ(AssociateByTimestamp(depth, rgb, 0.02).size(), 1u);
+}
+
+// yaml-cpp's own exceptions used to escape (an "internal error" naming no file), and
+// of a repeated key the first was taken silently.
+TEST_F(TumDatasetTest, CameraYamlRefusesNonScalarAndDuplicateKeysNamingFileAndKey) {
+  const auto path = dir() / "camera.yaml";
+  const std::string good = "width: 640\nheight: 480\nfx: 500\nfy: 500\ncx: 320\ncy: 240\ndepth_factor: 5000\n";
+  for (const std::string key : {"[fx, fy]: 500\n", "? {fx: 1}\n: 500\n", "~: 500\n"}) {
+    SCOPED_TRACE(key);
+    std::ofstream(path) << good << key;
+    const std::string message = ErrorMessage([&] { ReadCameraYaml(path); });
+    EXPECT_NE(message.find(path.string() + ": line 8: a key must be a plain name"), std::string::npos) << message;
+  }
+
+  std::ofstream(path) << good << "fx: 600\n";
+  const std::string message = ErrorMessage([&] { ReadCameraYaml(path); });
+  EXPECT_NE(message.find(path.string() + ": line 8: duplicate key 'fx'"), std::string::npos) << message;
+}
+
+// Finish() writes the frame lists last: when it stops before them (here: groundtruth.txt
+// cannot be written), the folder is not a sequence Open() accepts without ground truth.
+TEST_F(TumDatasetTest, FinishWritesTheFrameListsLast) {
+  const auto seq_dir = dir() / "seq";
+  TumSequenceWriter writer(seq_dir, SmallCamera());
+  RgbdFrame frame;
+  frame.color_bgr = cv::Mat(24, 32, CV_8UC3, cv::Scalar(1, 2, 3));
+  frame.depth_m = cv::Mat(24, 32, CV_32F, cv::Scalar(1.0));
+  writer.Add(frame, Eigen::Isometry3d::Identity());
+  // A folder in the way of WriteFileAtomically's temporary "<path>.tmp-<pid>".
+  std::filesystem::create_directory(seq_dir / ("groundtruth.txt.tmp-" + std::to_string(::getpid())));
+
+  EXPECT_NE(ErrorMessage([&] { writer.Finish(); }).find("groundtruth.txt"), std::string::npos);
+  for (const char* list : {"rgb.txt", "depth.txt", "associations.txt"}) {
+    EXPECT_FALSE(std::filesystem::exists(seq_dir / list)) << list;
+  }
+  EXPECT_THROW(TumSequence::Open(seq_dir), Error);
 }
 
 TEST_F(TumDatasetTest, WriterThenOpenRoundTrip) {
