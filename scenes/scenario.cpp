@@ -140,11 +140,13 @@ class FieldTable {
     Add("city.sidewalk_width_m", Double(&y.sidewalk_width_m, Closed(1.5, 10), "city.sidewalk_width_m"));
     Add("city.parked_cars", Int(&y.parked_cars, 0, 500, "city.parked_cars"));
     Add("city.moving_cars", Int(&y.moving_cars, 0, 100, "city.moving_cars"));
+    // Movers are timed by their speed (crossing cars and people reach a crossing when the
+    // camera is near it): at 0 they would stand where they cross, in the camera's way.
     Add("city.moving_car_speed_mps",
-        Double(&y.moving_car_speed_mps, Closed(0, 30), "city.moving_car_speed_mps"));
+        Double(&y.moving_car_speed_mps, OpenClosed(0, 30), "city.moving_car_speed_mps"));
     Add("city.pedestrians", Int(&y.pedestrians, 0, 300, "city.pedestrians"));
     Add("city.pedestrian_speed_mps",
-        Double(&y.pedestrian_speed_mps, Closed(0, 3), "city.pedestrian_speed_mps"));
+        Double(&y.pedestrian_speed_mps, OpenClosed(0, 3), "city.pedestrian_speed_mps"));
     Add("city.crossing_share", Double(&y.crossing_share, Closed(0, 1), "city.crossing_share"));
     Add("city.red_lights", Int(&y.red_lights, 0, 50, "city.red_lights"));
     Add("city.red_light_s", Double(&y.red_light_s, Closed(1, 120), "city.red_light_s"));

@@ -55,9 +55,9 @@ struct CitySpec {
   double sidewalk_width_m = 3.0;
   int parked_cars = 20;
   int moving_cars = 6;
-  double moving_car_speed_mps = 6.0;
+  double moving_car_speed_mps = 6.0;  // (0, 30]
   int pedestrians = 10;
-  double pedestrian_speed_mps = 1.3;
+  double pedestrian_speed_mps = 1.3;  // (0, 3]
   double crossing_share = 0.3;  // share of pedestrians that cross streets
   // Intersections of the route where the camera car waits at a red light (at most one
   // per intersection, spread over the route). While it waits, cross traffic (the

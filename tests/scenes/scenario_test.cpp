@@ -102,6 +102,16 @@ TEST(ScenarioTest, OutOfRangeNamesKeyAndValue) {
   EXPECT_EQ(ParseScenario("sensor: {min_depth_m: 10, max_depth_m: 0}\n", "ok.yaml").sensor.min_depth_m, 10);
 }
 
+// Crossing cars and people are timed by their speed to cross when the camera is near: at
+// 0 m/s they would stand where they cross, in the camera's way.
+TEST(ScenarioTest, CityMoversMustMove) {
+  EXPECT_EQ(ParseError("city: {moving_car_speed_mps: 0}\n"),
+            "my.yaml: city.moving_car_speed_mps: must be in (0, 30] (got 0)");
+  EXPECT_EQ(ParseError("city: {pedestrian_speed_mps: 0}\n"),
+            "my.yaml: city.pedestrian_speed_mps: must be in (0, 3] (got 0)");
+  EXPECT_EQ(ParseError("city: {moving_car_speed_mps: 0.5, pedestrian_speed_mps: 0.2}\n"), "");
+}
+
 TEST(ScenarioTest, WrongTypesAreRefused) {
   EXPECT_EQ(ParseError("camera:\n  fps: fast\n"), "my.yaml: camera.fps: expected a number (got 'fast')");
   EXPECT_EQ(ParseError("city: {parked_cars: 2.5}\n"), "my.yaml: city.parked_cars: expected an integer (got '2.5')");
