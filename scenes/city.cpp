@@ -5,6 +5,7 @@
 // right. A node is an intersection (i, j). Everything stands on the ground plane z = 0;
 // sidewalks are raised by kCurbHeightM.
 #include "scenes/builder.h"
+#include "scenes/city_layout.h"
 #include "scenes/person.h"
 #include "scenes/textures.h"
 
@@ -25,25 +26,14 @@ constexpr double kCurbHeightM = 0.15;
 // Parking slot pitch along the curb, as long as a real parallel stall: a car (4.9 m)
 // with room to pull out; a truck (7.2 m) stands only between cars or empty slots.
 constexpr double kSlotLengthM = 6.5;
-constexpr double kCurbGapM = 0.15;     // a parked vehicle's side to the curb
 constexpr double kParkedGapM = 0.3;    // least gap between parked vehicles, bumper to bumper
-
-// Footprints, half length along the heading and half width across it.
-struct VehicleDims {
-  double half_length, half_width;
-};
-constexpr VehicleDims kCarDims{2.45, 1.12}, kTruckDims{3.6, 1.2}, kBusDims{5.6, 1.3};  // cars with mirrors
-// Each side of a street, from the curb: a parking lane as wide as the widest parked
-// vehicle (trucks; buses do not park) with its curb gap, then the driving lane, whose
-// centre line the widest moving vehicle (a bus) keeps 0.2 m clear of the parking lane.
-constexpr double kParkingLaneM = kCurbGapM + 2 * kTruckDims.half_width;
-constexpr double kLaneToParkingM = kBusDims.half_width + 0.2;
+// Vehicle footprints and the street's cross-section (scenes/city_layout.h).
+using namespace city_layout;
 constexpr double kGroundFloorM = 4.2;  // shop floor height
 constexpr double kFloorM = 3.2;        // upper floor height
 constexpr double kBayM = 3.3;          // window bay width
 constexpr int kFacadeFloors = 3, kFacadeBays = 4;
 constexpr double kStopLineM = 4.0;          // stop line, before the edge of the crossing road
-constexpr double kCameraToBumperM = 2.0;    // camera car: from the camera to its front bumper
 constexpr double kQueueGapM = 2.0;          // bumper to bumper, standing in a queue
 constexpr double kCarAccelMps2 = 2.0;       // braking and pulling away at a red light
 constexpr double kReactionS = 1.0;          // the camera car starts this long after the car ahead
@@ -80,7 +70,7 @@ class CityBuilder {
     block_ = spec_.block_size_m;
     road_ = spec_.road_width_m;
     walk_ = spec_.sidewalk_width_m;
-    lane_ = road_ / 2 - kParkingLaneM - kLaneToParkingM;
+    lane_ = DrivingLaneOffsetM(road_);
     // Two buses passing each other keep 0.2 m apart (the oncoming lane is 0.1 m further
     // out, MakeRouteLanes); Scenario's lower bound on the road width ensures it.
     if (2 * lane_ + 0.1 < 2 * kBusDims.half_width + 0.2) {

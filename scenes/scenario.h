@@ -41,8 +41,11 @@ struct SecondPassSpec {
   double relocated_shift_m = 0.0;
   double removed_share = 0.1;    // share removed, [0, 1]
   int added = 2;                 // new parked / moveable objects
-  Eigen::Vector3d camera_offset_m{0.0, 0.0, 0.0};  // offset of the route, route frame
-                                                   // (x forward, y left, z up)
+  // Offset of the route, route frame (x forward, y left, z up), each in [-5, 5]. In a
+  // city the camera rides on a car and the offset moves the car: x in [-1, 1] (it stands
+  // 2 m behind the vehicle it waits behind at a red light), y keeps the car within the
+  // driving lanes ([-0.38, 4.28] on a 12 m road), and the camera at least 0.3 m high.
+  Eigen::Vector3d camera_offset_m{0.0, 0.0, 0.0};
   double camera_yaw_offset_deg = 0.0;              // heading offset of the camera
 };
 
