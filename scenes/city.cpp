@@ -1269,12 +1269,13 @@ class CityBuilder {
   // camera), oncoming in the opposite lane, and crossing at the route's intersections.
   void MakeMovingCars(const Traffic& traffic) {
     std::mt19937_64 rng = Rng("moving_cars" + traffic.tag);
+    // The vehicles the camera waits behind are not counted in moving_cars.
+    MakeRedLightLeads(RouteNodes(), traffic);
     if (spec_.moving_cars <= 0) return;
     const RouteLanes lanes = MakeRouteLanes();
     const std::vector<Crossing> crossings = CrossingsOnRoute(lanes);
     const std::vector<double> turns = TurnsOnRoute(lanes);
     const std::vector<CarRole> roles = MovingCarRoles(lanes.two_lanes, !crossings.empty());
-    MakeRedLightLeads(RouteNodes(), traffic);
     const int n_oncoming = static_cast<int>(std::count(roles.begin(), roles.end(), CarRole::kOncoming));
     const int n_crossing = static_cast<int>(std::count(roles.begin(), roles.end(), CarRole::kCrossing));
     int ahead = 0, oncoming = 0, crossing = 0;

@@ -398,6 +398,36 @@ TEST(CityTest, CameraWaitsAtRedLightsWhileTrafficAndPeopleCrossInFront) {
   }
 }
 
+// Vehicles standing right ahead of the camera in its lane at time t (what it waits behind).
+int VehiclesStandingAhead(const World& w, Pass pass, double t) {
+  const Eigen::Isometry3d T_cw = CameraPoseAt(w, pass, t).inverse();
+  int ahead = 0;
+  for (const Object& o : w.objects) {
+    const Placement& p = o.placement[PassIndex(pass)];
+    if (!p.present || !p.moving || !IsVehicle(o)) continue;
+    const Eigen::Vector3d c = T_cw * ObjectPoseAt(o, pass, t).translation();
+    ahead += c.z() > 3.0 && c.z() < 12.0 && std::abs(c.x()) < 1.0 && !ObjectMovesAt(o, pass, t, 0.5);
+  }
+  return ahead;
+}
+
+// The vehicles the camera waits behind are not counted in city.moving_cars: with none,
+// the camera still waits behind one at the first light, not behind nothing.
+TEST(CityTest, RedLightLeadsComeWithoutMovingCars) {
+  Scenario s = SmallCityScenario();
+  ApplyOverrides(s, {"city.route_length_m=130", "city.red_lights=2", "city.red_light_s=6", "city.moving_cars=0",
+                     "city.pedestrians=0"});
+  const World w = BuildWorld(s);
+  for (Pass pass : kBothPasses) {
+    const auto stretches = StandingStretches(w, pass);
+    ASSERT_EQ(stretches.size(), 2u) << PassName(pass);
+    for (std::size_t k = 0; k < stretches.size(); ++k) {
+      const double t_mid = FrameStamp(w, (stretches[k].first + stretches[k].second) / 2);
+      EXPECT_EQ(VehiclesStandingAhead(w, pass, t_mid), k == 0 ? 1 : 0) << PassName(pass) << " light " << k;
+    }
+  }
+}
+
 // city.red_light_lead picks the vehicle the camera waits behind; the rest of the world is
 // drawn as with "random", so a study of the lead changes only the lead.
 TEST(CityTest, RedLightLeadIsTheVehicleKindAsked) {
