@@ -304,14 +304,17 @@ class CityBuilder {
     std::mt19937_64 rng = Rng("red_lights");
     const Poly2 lane(lane_pts_);
     // Candidates: every intersection the camera reaches with room to brake before it and
-    // to see the scene after it.
+    // to see the scene after it. The walk goes on past the route's end: an intersection
+    // there has its stop line off the camera's lane (whose nearest point is elsewhere).
     std::vector<RedLight> candidates;
     for (std::size_t k = 1; k < nodes_.size(); ++k) {
       RedLight r;
       r.node = k;
       r.arrive = kStreetDirs[dirs_[k]];
-      r.camera_stop_s = lane.Closest(StopLinePoint(k, r.arrive) - r.arrive * kCameraToBumperM);
-      if (r.camera_stop_s >= 40.0 && r.camera_stop_s <= lane_s_.back() - 15.0) candidates.push_back(r);
+      const Vec2 stop = StopLinePoint(k, r.arrive) - r.arrive * kCameraToBumperM;
+      r.camera_stop_s = lane.Closest(stop);
+      const bool on_route = (lane.At(r.camera_stop_s) - stop).norm() < 0.1;
+      if (on_route && r.camera_stop_s >= 40.0 && r.camera_stop_s <= lane_s_.back() - 15.0) candidates.push_back(r);
     }
     const int n = std::min(spec_.red_lights, static_cast<int>(candidates.size()));
     for (int i = 0; i < n; ++i) {
@@ -832,10 +835,12 @@ class CityBuilder {
       return p[i - 1] + (seg > 0 ? (s - c[i - 1]) / seg : 0.0) * (p[i] - p[i - 1]);
     }
     Vec2 Tangent(double s) const { return (At(s + 0.5) - At(s - 0.5)).normalized(); }
-    // Arc length of the point nearest to q.
-    double Closest(const Vec2& q) const {
+    // Arc length of the point nearest to q, on the segments that reach into [lo_s, hi_s]
+    // (a lane that passes the same place twice: the pass meant).
+    double Closest(const Vec2& q, double lo_s = -1e18, double hi_s = 1e18) const {
       double best = 1e18, best_s = 0;
       for (std::size_t i = 1; i < p.size(); ++i) {
+        if (c[i] < lo_s || c[i - 1] > hi_s) continue;
         const Vec2 d = p[i] - p[i - 1];
         const double len2 = d.squaredNorm();
         const double u = len2 > 0 ? std::clamp((q - p[i - 1]).dot(d) / len2, 0.0, 1.0) : 0.0;
@@ -1089,9 +1094,14 @@ class CityBuilder {
       const int index = static_cast<int>(world_.objects.size()) - 1;
       // Straight lead-in long enough that the start offset stays on the path.
       const double ext_before = v * r.stand_from_s + 200.0;
+      const double camera_start = ext_before + block_ / 2;  // the camera's start on the path
       const Poly2 lane(NodeLane(fnodes, lane_, ext_before, 300.0));
       const Vec2 stop_line = StopLinePoint(r.node, r.arrive);
-      const double stop_arc = lane.Closest(stop_line);
+      // Where the camera's lane meets the stop line, not where the lane's straight
+      // extension past the route's end, or the route again, passes it.
+      const double stop_arc_expected =
+          camera_start + r.camera_stop_s + kCameraToBumperM + 2 * Dims(r.lead_kind).half_length + kQueueGapM;
+      const double stop_arc = lane.Closest(stop_line, stop_arc_expected - 10.0, stop_arc_expected + 10.0);
       std::vector<Vec2> pts;
       for (std::size_t i = 0; i < lane.p.size() && lane.c[i] < stop_arc; ++i) pts.push_back(lane.p[i]);
       pts.push_back(stop_line);

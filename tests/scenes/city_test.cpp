@@ -411,6 +411,37 @@ int VehiclesStandingAhead(const World& w, Pass pass, double t) {
   return ahead;
 }
 
+// Distance from the camera, along its heading (on a straight street), to the centre of
+// the next intersection: street centre lines run every block_m.
+double ToNextIntersection(const Eigen::Isometry3d& T_wc, double block_m) {
+  const Eigen::Vector3d forward = T_wc.linear().col(2);
+  const bool along_x = std::abs(forward.x()) > std::abs(forward.y());
+  const double at = along_x ? T_wc.translation().x() : T_wc.translation().y();
+  const bool ahead_positive = (along_x ? forward.x() : forward.y()) > 0;
+  return ahead_positive ? std::ceil(at / block_m) * block_m - at : at - std::floor(at / block_m) * block_m;
+}
+
+// The camera stands at red lights of intersections it drives through: 2 m behind the
+// stop line (4 m before the crossing road, 6 m from its centre line), or a vehicle and
+// 2 m further back. The random walk of streets goes on past the route's end, and an
+// intersection there is no red light of the route.
+TEST(CityTest, RedLightsAreAtIntersectionsOfTheRoute) {
+  for (const int lights : {3, 4}) {
+    Scenario s = LoadScenario(ScenarioPath("city_rush_hour.yaml"));
+    ApplyOverrides(s, {"city.red_lights=" + std::to_string(lights), "city.moving_cars=0", "city.pedestrians=0"});
+    const World w = BuildWorld(s);
+    const auto stretches = StandingStretches(w, Pass::kFirst);
+    ASSERT_EQ(static_cast<int>(stretches.size()), lights);
+    for (std::size_t k = 0; k < stretches.size(); ++k) {
+      const double to_centre = ToNextIntersection(CameraPoseAt(w, Pass::kFirst, FrameStamp(w, stretches[k].first)),
+                                                  s.city.block_size_m);
+      // 12 m first in line, 12 m + a bus (11.2 m) + 2 m at most behind one.
+      EXPECT_GE(to_centre, 12.0 - 0.05) << lights << " red lights, light " << k;
+      EXPECT_LE(to_centre, 12.0 + 11.2 + 2.0 + 0.05) << lights << " red lights, light " << k;
+    }
+  }
+}
+
 // The vehicles the camera waits behind are not counted in city.moving_cars: with none,
 // the camera still waits behind one at the first light, not behind nothing.
 TEST(CityTest, RedLightLeadsComeWithoutMovingCars) {
