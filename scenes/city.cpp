@@ -297,9 +297,15 @@ class CityBuilder {
     return NodePos(nodes_[k]) - a * (road_ / 2 + kStopLineM) + Right(a) * lane_;
   }
 
+  // Lights at the candidates spread over the route. The camera car brakes from its
+  // cruising speed at kCarAccelMps2 and must be back at that speed before it brakes for
+  // the next light (DistanceWithHalts), so a light it stands at nearer than v^2 / 2a to the
+  // start or v^2 / a to the light before is passed over for the next candidate; lights
+  // that find none are left out (red_lights_left_out_).
   void PlanRedLights() {
     red_lights_.clear();
     camera_halts_.clear();
+    red_lights_left_out_ = 0;
     if (spec_.red_lights <= 0) return;
     std::mt19937_64 rng = Rng("red_lights");
     const Poly2 lane(lane_pts_);
@@ -316,18 +322,32 @@ class CityBuilder {
       const bool on_route = (lane.At(r.camera_stop_s) - stop).norm() < 0.1;
       if (on_route && r.camera_stop_s >= 40.0 && r.camera_stop_s <= lane_s_.back() - 15.0) candidates.push_back(r);
     }
+    const double v = spec_.camera_speed_mps;
+    const double brake_m = 0.5 * v * v / kCarAccelMps2;
     const int n = std::min(spec_.red_lights, static_cast<int>(candidates.size()));
+    std::size_t next = 0;  // the first candidate after the last light made
     for (int i = 0; i < n; ++i) {
-      RedLight r = candidates[(2 * i + 1) * candidates.size() / (2 * n)];  // spread over the route
-      if (i % 2 == 0) {
-        // Drawn even where the scenario names the kind, so the other lights draw as before.
-        r.lead_kind = VehicleKind(rng, /*allow_bus=*/true);
-        if (spec_.red_light_lead != "random") r.lead_kind = spec_.red_light_lead;
-        r.camera_stop_s -= 2 * Dims(r.lead_kind).half_length + kQueueGapM;
+      // The first light and every other one after it wait behind a vehicle; its kind is
+      // drawn even where the scenario names it, so the other lights draw as before.
+      std::string lead_kind;
+      if (red_lights_.size() % 2 == 0) {
+        lead_kind = VehicleKind(rng, /*allow_bus=*/true);
+        if (spec_.red_light_lead != "random") lead_kind = spec_.red_light_lead;
       }
-      camera_halts_.push_back({r.camera_stop_s, spec_.red_light_s});
-      red_lights_.push_back(r);
+      for (std::size_t c = std::max(next, (2 * i + 1) * candidates.size() / (2 * n)); c < candidates.size(); ++c) {
+        RedLight r = candidates[c];  // spread over the route
+        r.lead_kind = lead_kind;
+        if (!r.lead_kind.empty()) r.camera_stop_s -= 2 * Dims(r.lead_kind).half_length + kQueueGapM;
+        const bool room = camera_halts_.empty() ? r.camera_stop_s >= brake_m
+                                                : r.camera_stop_s - camera_halts_.back().at_m >= 2 * brake_m;
+        if (!room) continue;
+        camera_halts_.push_back({r.camera_stop_s, spec_.red_light_s});
+        red_lights_.push_back(r);
+        next = c + 1;
+        break;
+      }
     }
+    red_lights_left_out_ = spec_.red_lights - static_cast<int>(red_lights_.size());
     for (RedLight& r : red_lights_) {
       r.stand_from_s = CameraTimeAt(r.camera_stop_s);
       r.stand_until_s = r.stand_from_s + spec_.red_light_s;
@@ -1121,11 +1141,18 @@ class CityBuilder {
         PathMotion p = DrivePath(pts);
         p.speed_mps = v;
         p.accel_mps2 = kCarAccelMps2;
-        const double stands_from = r.stand_from_s - Uniform(rng, 1.5, 4.0);
+        const double ramp_s = v / kCarAccelMps2, ramp_m = 0.5 * v * ramp_s;
+        double stands_from = r.stand_from_s - Uniform(rng, 1.5, 4.0);
+        p.start_offset_m = stand_at - ramp_m - v * (stands_from - ramp_s);
+        if (stands_from < ramp_s) {
+          // Too near its light to cruise ahead that long (a halt it would have to brake
+          // for before t = 0 is ignored): braking for it from t = 0; the camera, braking
+          // later from further back, keeps its distance.
+          stands_from = ramp_s;
+          p.start_offset_m = stand_at - ramp_m;
+        }
         const double goes_at = r.stand_until_s - kReactionS;
         p.halts = {{stand_at, goes_at - stands_from}};
-        const double ramp_s = v / kCarAccelMps2, ramp_m = 0.5 * v * ramp_s;
-        p.start_offset_m = stand_at - ramp_m - v * (stands_from - ramp_s);
         return p;
       });
     }
@@ -1507,6 +1534,7 @@ class CityBuilder {
  public:
   int parked_candidates_ = 0;
   int movers_left_out_ = 0;
+  int red_lights_left_out_ = 0;
 
  private:
   const Scenario& s_;
@@ -1537,6 +1565,7 @@ World BuildCity(const Scenario& scenario) {
   World world = builder.Build();
   RecordSecondPassChanges(&world, builder.parked_candidates_);
   world.movers_left_out = builder.movers_left_out_;
+  world.red_lights_left_out = builder.red_lights_left_out_;
   return world;
 }
 

@@ -67,7 +67,10 @@ struct CitySpec {
   // crossing share of moving cars) passes and the crossing pedestrians walk over the
   // crosswalk in front of it. At the first light and every other one after it, it waits
   // behind a vehicle (one more, not counted in moving_cars) that pulls away first when
-  // the light turns green; at the others it is first in line.
+  // the light turns green; at the others it is first in line. An intersection nearer to
+  // the start than the camera car's braking distance at camera_speed_mps (v^2 / 2a, with
+  // a = 2 m/s^2), or nearer to the light before than v^2 / a, is passed over for the next
+  // one; lights that find none are left out (World::red_lights_left_out).
   int red_lights = 0;
   double red_light_s = 12.0;  // standing time at each light
   // The vehicle the camera car waits behind at those lights: random (a car, truck or

@@ -442,6 +442,46 @@ TEST(CityTest, RedLightsAreAtIntersectionsOfTheRoute) {
   }
 }
 
+// The camera car brakes and pulls away at 2 m/s^2: from 10 m/s it needs 25 m to stop and
+// 50 m between two stops to be back at speed before the next. Lights nearer than that to
+// the start or to the light before are passed over for the next intersection, or left
+// out and counted; the camera never drives backwards, and it stands at every light made.
+TEST(CityTest, CameraNeverDrivesBackwardsAtRedLights) {
+  for (const double speed : {6.0, 10.0, 15.0}) {
+    for (const int lights : {2, 3, 4}) {
+      Scenario s = LoadScenario(ScenarioPath("city_rush_hour.yaml"));
+      ApplyOverrides(s, {"city.camera_speed_mps=" + std::to_string(speed), "city.red_lights=" + std::to_string(lights),
+                         "city.moving_cars=0", "city.pedestrians=0"});
+      const World w = BuildWorld(s);
+      SCOPED_TRACE(std::to_string(speed) + " m/s, " + std::to_string(lights) + " red lights");
+      std::printf("city_rush_hour.yaml at %.0f m/s with %d red lights: %d left out\n", speed, lights,
+                  w.red_lights_left_out);
+      EXPECT_GE(w.red_lights_left_out, 0);
+      if (speed == 6.0) {
+        EXPECT_EQ(w.red_lights_left_out, 0);
+      }
+      for (Pass pass : kBothPasses) {
+        double worst_back = 0;
+        int worst_frame = -1;
+        for (int f = 1; f < w.frames_per_pass[PassIndex(pass)]; ++f) {
+          const Eigen::Isometry3d before = CameraPoseAt(w, pass, FrameStamp(w, f - 1));
+          const Eigen::Vector3d step = CameraPoseAt(w, pass, FrameStamp(w, f)).translation() - before.translation();
+          const Eigen::Vector2d forward = before.linear().col(2).head<2>().normalized();
+          if (-step.head<2>().dot(forward) > worst_back) worst_back = -step.head<2>().dot(forward), worst_frame = f;
+        }
+        EXPECT_LT(worst_back, 1e-6) << PassName(pass) << " frame " << worst_frame;
+        const auto stretches = StandingStretches(w, pass);
+        ASSERT_EQ(static_cast<int>(stretches.size()), lights - w.red_lights_left_out) << PassName(pass);
+        // At the first light made and every other one after it, behind a vehicle.
+        for (std::size_t k = 0; k < stretches.size(); ++k) {
+          const double t_mid = FrameStamp(w, (stretches[k].first + stretches[k].second) / 2);
+          EXPECT_EQ(VehiclesStandingAhead(w, pass, t_mid), k % 2 == 0 ? 1 : 0) << PassName(pass) << " light " << k;
+        }
+      }
+    }
+  }
+}
+
 // The vehicles the camera waits behind are not counted in city.moving_cars: with none,
 // the camera still waits behind one at the first light, not behind nothing.
 TEST(CityTest, RedLightLeadsComeWithoutMovingCars) {
