@@ -37,6 +37,7 @@ constexpr double kStopLineM = 4.0;          // stop line, before the edge of the
 constexpr double kQueueGapM = 2.0;          // bumper to bumper, standing in a queue
 constexpr double kCarAccelMps2 = 2.0;       // braking and pulling away at a red light
 constexpr double kReactionS = 1.0;          // the camera car starts this long after the car ahead
+constexpr double kLeadFollowS = 1.0;        // leads cruising one behind the other: time gap
 
 using Vec2 = Eigen::Vector2d;
 using Vec3 = Eigen::Vector3d;
@@ -961,15 +962,32 @@ class CityBuilder {
   };
   static constexpr double kCarMarginM = 0.3;     // cars keep 0.6 m between bodies
   static constexpr double kPersonMarginM = 0.1;  // people 0.2 m from anyone
+  // Least gap between the camera car's body and a moving vehicle's or a person's, a hard
+  // requirement (CameraCarClear).
+  static constexpr double kCameraCarToVehicleM = 1.0;
+  static constexpr double kCameraCarToPersonM = 0.5;
 
+  // Frame samples of both passes, and the camera car's track at them: a car of kCarDims
+  // whose front bumper is kCameraToBumperM ahead of the camera, heading along the route
+  // (pass 2's camera_offset_m moves it, camera_yaw_offset_deg only turns the camera on it).
   void MakeSamples() {
     samples_.clear();
+    camera_car_ = Track{};
+    camera_car_.half_length = kCarDims.half_length;
+    camera_car_.half_width = kCarDims.half_width;
+    camera_car_.car = true;
+    camera_car_.radius = std::hypot(kCarDims.half_length, kCarDims.half_width);
     for (Pass pass : kBothPasses) {
       sample_stamps_[PassIndex(pass)].clear();
       for (int f = 0; f < world_.frames_per_pass[PassIndex(pass)]; ++f) {
         const double t = FrameStamp(world_, f);
         samples_.push_back({pass, t, CameraPoseAt(world_, pass, t).translation().head<2>()});
         sample_stamps_[PassIndex(pass)].push_back(t);
+        // Both passes keep the same timing: pass 1's optical axis is the route's heading.
+        const Vec2 heading = CameraPoseAt(world_, Pass::kFirst, t).linear().col(2).head<2>().normalized();
+        camera_car_.pos.push_back(samples_.back().camera + (kCameraToBumperM - kCarDims.half_length) * heading);
+        camera_car_.heading.push_back(heading);
+        camera_car_.present.push_back(1);
       }
     }
   }
@@ -1049,12 +1067,29 @@ class CityBuilder {
     return true;
   }
 
+  // Whether the track's body keeps kCameraCarToVehicleM (a car) or kCameraCarToPersonM
+  // from the camera car's at every sample (footprints inflated by half of it each, a
+  // separating-axis ratio >= 1 means that far apart).
+  bool CameraCarClear(const Track& tr) const {
+    const double margin = 0.5 * (tr.car ? kCameraCarToVehicleM : kCameraCarToPersonM);
+    // Pairs further apart than sqrt(2) times the inflated radii are clear (Clearance).
+    const double radii = std::hypot(tr.half_length + margin, tr.half_width + margin) +
+                         std::hypot(camera_car_.half_length + margin, camera_car_.half_width + margin);
+    for (std::size_t i = 0; i < samples_.size(); ++i) {
+      if (!tr.present[i]) continue;
+      if ((camera_car_.pos[i] - tr.pos[i]).squaredNorm() > 2.0 * radii * radii) continue;
+      if (SatRatio(tr, camera_car_, i, margin) < 1.0) return false;
+    }
+    return true;
+  }
+
   // Tries paths from `make(attempt)` on the object (moving, on the same path in each pass
   // it is `present` in, absent from the other) and keeps the clearest of those whose body
-  // touches no other actor's, recording its track. When `attempts` find no such path, up
-  // to three times as many more are tried; when none does either, the object is taken out
-  // of the world again (it is the last one added) and false is returned: a crowd denser
-  // than the streets hold gets fewer actors, never actors that run through each other.
+  // touches no other actor's and keeps clear of the camera car's (CameraCarClear),
+  // recording its track. When `attempts` find no such path, up to three times as many
+  // more are tried; when none does either, the object is taken out of the world again (it
+  // is the last one added) and false is returned: a crowd denser than the streets hold
+  // gets fewer actors, never actors that run through each other or the camera car.
   template <typename MakePath>
   bool PlaceMover(int index, const std::array<bool, 2>& present, double half_length, double half_width, bool car,
                   double min_camera_m, int attempts, MakePath make) {
@@ -1075,7 +1110,8 @@ class CityBuilder {
       // Once a clear path is kept, Clearance may stop as soon as it cannot beat it.
       const double score = Clearance(tr, min_camera_m, best_clear ? best : -1.0);
       if (best_clear && score <= best) continue;
-      const bool clear = score >= 1.0 || BodiesClear(tr);  // margins >= 1: bodies apart
+      // Margins >= 1: bodies apart.
+      const bool clear = (score >= 1.0 || BodiesClear(tr)) && CameraCarClear(tr);
       if (clear != best_clear ? clear : score > best) {
         best = score;
         best_clear = clear;
@@ -1101,13 +1137,27 @@ class CityBuilder {
 
   // The vehicles the camera waits behind at red lights. Each comes along the camera's
   // lane ahead of it at the camera's speed, stands at the stop line from a few seconds
-  // before the camera stands behind it, pulls away kReactionS before the camera does,
-  // and leaves the route at that intersection (straight on where the camera turns,
-  // right where it goes straight), so no two of them meet in the camera's lane.
+  // before the camera would stand behind it had it not stopped at the lights before,
+  // pulls away kReactionS before the camera does, and leaves the route at that
+  // intersection (straight on where the camera turns, right where it goes straight), so
+  // no two of them meet in the camera's lane. It makes no stop before its own: it passes
+  // the lights before ahead of the camera, and ahead of their leads (at least
+  // kQueueGapM + kLeadFollowS of the speed bumper to bumper), before they turn red, and
+  // waits out the camera's stops at its own light. One that would have to brake for its
+  // light before the pass starts brakes from the start (or stands at its stop line from
+  // the start, if braking from there would put it behind a lead before it).
   void MakeRedLightLeads(const std::vector<Node>& fnodes, const Traffic& traffic) {
     std::mt19937_64 rng = Rng("red_light_leads" + traffic.tag);
     const double v = spec_.camera_speed_mps;
-    for (const RedLight& r : red_lights_) {
+    const double ramp_s = v / kCarAccelMps2, ramp_m = 0.5 * v * ramp_s;
+    const double follow_m = kQueueGapM + kLeadFollowS * v;  // bumper to bumper, cruising
+    // Of the leads placed: where each is at t = 0 on the camera's lane (camera arc
+    // length), cruising at v, and its half length.
+    std::vector<std::pair<double, double>> placed;
+    double delay_s = 0.0;  // the camera's, from its stops at the lights before
+    for (std::size_t k = 0; k < red_lights_.size(); ++k) {
+      const RedLight& r = red_lights_[k];
+      if (k > 0) delay_s += camera_halts_[k - 1].wait_s + ramp_s;
       if (r.lead_kind.empty()) continue;
       Object& o = b_.AddObject(r.lead_kind);
       o.parts.push_back(MakeVehicle(rng, o.category_name));
@@ -1137,24 +1187,41 @@ class CityBuilder {
       }
       const VehicleDims dims = Dims(r.lead_kind);
       const double stand_at = stop_arc - dims.half_length;  // its front at the stop line
-      PlaceMover(index, traffic.present, dims.half_length, dims.half_width, /*car=*/true, /*min_camera_m=*/3.15, 40, [&](int) {
+      // Least start offset that keeps it ahead of the leads placed before.
+      double least_start = -1e18;
+      for (const auto& [at_m, half_length] : placed) {
+        least_start = std::max(least_start, camera_start + at_m + half_length + follow_m + dims.half_length);
+      }
+      const double goes_at = r.stand_until_s - kReactionS;
+      const bool kept = PlaceMover(index, traffic.present, dims.half_length, dims.half_width, /*car=*/true,
+                                  /*min_camera_m=*/3.15, 40, [&](int) {
         PathMotion p = DrivePath(pts);
         p.speed_mps = v;
         p.accel_mps2 = kCarAccelMps2;
-        const double ramp_s = v / kCarAccelMps2, ramp_m = 0.5 * v * ramp_s;
-        double stands_from = r.stand_from_s - Uniform(rng, 1.5, 4.0);
+        double stands_from = r.stand_from_s - (delay_s + Uniform(rng, 1.5, 4.0));
         p.start_offset_m = stand_at - ramp_m - v * (stands_from - ramp_s);
+        if (p.start_offset_m < least_start) {
+          stands_from -= (least_start - p.start_offset_m) / v;
+          p.start_offset_m = stand_at - ramp_m - v * (stands_from - ramp_s);
+        }
         if (stands_from < ramp_s) {
-          // Too near its light to cruise ahead that long (a halt it would have to brake
-          // for before t = 0 is ignored): braking for it from t = 0; the camera, braking
-          // later from further back, keeps its distance.
+          // Too near its light to cruise ahead that long: braking for it from t = 0 (the
+          // camera, braking later from further back, keeps its distance), or, where that
+          // would put it behind a lead placed before, standing there from t = 0.
           stands_from = ramp_s;
           p.start_offset_m = stand_at - ramp_m;
+          if (p.start_offset_m < least_start) {
+            stands_from = 0.0;
+            p.start_offset_m = stand_at;
+          }
         }
-        const double goes_at = r.stand_until_s - kReactionS;
         p.halts = {{stand_at, goes_at - stands_from}};
         return p;
       });
+      if (kept) {
+        const PathMotion& path = world_.objects[index].placement[traffic.present[0] ? 0 : 1].path;
+        placed.push_back({path.start_offset_m - camera_start, dims.half_length});
+      }
     }
   }
 
@@ -1554,6 +1621,7 @@ class CityBuilder {
   std::vector<Sample> samples_;  // frames of both passes
   std::array<std::vector<double>, 2> sample_stamps_;  // samples_' stamps, per pass
   std::vector<Track> tracks_;    // placed moving actors
+  Track camera_car_;             // the car the camera rides on, at the samples
   std::vector<RedLight> red_lights_;
   std::vector<Halt> camera_halts_;  // the red lights, by camera arc length
 };

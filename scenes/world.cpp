@@ -123,14 +123,15 @@ double DistanceWithHalts(double start_m, double speed_mps, const std::vector<Hal
   if (v <= 0.0 || a <= 0.0) return start_m + v * t;
   const double ramp_s = v / a, ramp_m = 0.5 * v * v / a;  // time and distance to stop from v
   double delay_s = 0.0;  // behind the schedule of cruising straight through
-  // Set while the mover stands at a halt from which it does not get back to cruising
-  // speed before braking for the next one: when it pulls away, and where.
+  // Set while the mover stands at a halt (or starts standing) from which it does not get
+  // back to cruising speed before braking for the next one: when it pulls away, and where.
   std::optional<double> pull_away_s;
   double from_m = start_m;
   for (std::size_t i = 0; i < halts.size(); ++i) {
     const Halt& h = halts[i];
     // Pulling away from h, it would still be speeding up where it has to brake for the next.
     const bool next_near = i + 1 < halts.size() && halts[i + 1].at_m - h.at_m < 2.0 * ramp_m;
+    if (!pull_away_s && h.at_m == start_m) pull_away_s = 0.0;  // a standing start
     double go_s = 0.0;  // when it pulls away from h
     if (!pull_away_s) {
       // Reached at cruising speed: brakes over ramp_m, stands, pulls away over ramp_m.

@@ -398,6 +398,20 @@ TEST(CityTest, CameraWaitsAtRedLightsWhileTrafficAndPeopleCrossInFront) {
   }
 }
 
+// The camera rides on a car 4.9 m by 2.24 m (mirrors included) whose front bumper is 2 m
+// ahead of the camera, heading along the route (pass 1's optical axis; pass 2's
+// camera_offset_m moves it): its footprint at time t of `pass`.
+std::array<Eigen::Vector2d, 4> CameraCarCorners(const World& w, Pass pass, double t) {
+  const Eigen::Vector3d forward = CameraPoseAt(w, Pass::kFirst, t).linear().col(2);
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::AngleAxisd(std::atan2(forward.y(), forward.x()), Eigen::Vector3d::UnitZ()).matrix();
+  T.translation() = CameraPoseAt(w, pass, t).translation();
+  Footprint car;
+  car.lo = Eigen::Vector2d(2.0 - 4.9, -1.12);
+  car.hi = Eigen::Vector2d(2.0, 1.12);
+  return Corners(car, T);
+}
+
 // Vehicles standing right ahead of the camera in its lane at time t (what it waits behind).
 int VehiclesStandingAhead(const World& w, Pass pass, double t) {
   const Eigen::Isometry3d T_cw = CameraPoseAt(w, pass, t).inverse();
@@ -409,6 +423,52 @@ int VehiclesStandingAhead(const World& w, Pass pass, double t) {
     ahead += c.z() > 3.0 && c.z() < 12.0 && std::abs(c.x()) < 1.0 && !ObjectMovesAt(o, pass, t, 0.5);
   }
   return ahead;
+}
+
+// With more red lights than rush hour's two, the vehicles the camera waits behind at the
+// third and later ones came along its lane as it stood at the lights before; they now
+// pass those ahead of it and wait at their own. No moving vehicle's body comes within a
+// metre of the camera car's at any frame of either pass, and a vehicle stands ahead at
+// the first light and every other one after it.
+TEST(CityTest, VehiclesKeepClearOfTheCameraCarAtEveryRedLight) {
+  for (const int lights : {2, 3, 4}) {
+    Scenario s = LoadScenario(ScenarioPath("city_rush_hour.yaml"));
+    ApplyOverride(s, "city.red_lights", std::to_string(lights));
+    const World w = BuildWorld(s);
+    const int made = lights - w.red_lights_left_out;
+    std::printf("city_rush_hour.yaml with %d red lights: %d made, %d moving actors left out\n", lights, made,
+                w.movers_left_out);
+    EXPECT_EQ(w.red_lights_left_out, 0) << lights << " red lights: the route has room for them";
+    for (Pass pass : kBothPasses) {
+      SCOPED_TRACE(std::to_string(lights) + " red lights, " + PassName(pass));
+      const auto stretches = StandingStretches(w, pass);
+      ASSERT_EQ(static_cast<int>(stretches.size()), made);
+      for (int k = 0; k < made; ++k) {
+        const double t_mid = FrameStamp(w, (stretches[k].first + stretches[k].second) / 2);
+        EXPECT_EQ(VehiclesStandingAhead(w, pass, t_mid), k % 2 == 0 ? 1 : 0) << "light " << k;
+      }
+      std::vector<std::pair<const Object*, Footprint>> vehicles;
+      for (const Object& o : w.objects) {
+        const Placement& p = o.placement[PassIndex(pass)];
+        if (IsVehicle(o) && p.present && p.moving) vehicles.push_back({&o, FootprintOf(o)});
+      }
+      std::vector<double> closest(vehicles.size(), 1e9);
+      std::vector<int> closest_frame(vehicles.size(), -1);
+      for (int f = 0; f < w.frames_per_pass[PassIndex(pass)]; ++f) {
+        const double t = FrameStamp(w, f);
+        const auto camera_car = CameraCarCorners(w, pass, t);
+        for (std::size_t i = 0; i < vehicles.size(); ++i) {
+          const auto& [o, footprint] = vehicles[i];
+          const double gap = Separation(camera_car, Corners(footprint, ObjectPoseAt(*o, pass, t)));
+          if (gap < closest[i]) closest[i] = gap, closest_frame[i] = f;
+        }
+      }
+      for (std::size_t i = 0; i < vehicles.size(); ++i) {
+        EXPECT_GT(closest[i], /*min_gap_m=*/0.9) << vehicles[i].first->category_name << " "
+                                                 << vehicles[i].first->instance_id << " at frame " << closest_frame[i];
+      }
+    }
+  }
 }
 
 // Distance from the camera, along its heading (on a straight street), to the centre of

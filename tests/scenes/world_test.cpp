@@ -257,6 +257,18 @@ TEST(WorldTest, NearHaltsAreReachedWithoutCruisingNeverBackwards) {
   EXPECT_LE(worst_step, v * dt + 1e-9);
 }
 
+// A halt at the start itself: the mover stands there from t = 0, then pulls away.
+TEST(WorldTest, HaltAtTheStartIsAStandingStart) {
+  const double v = 6.0, a = 2.0;
+  const std::vector<Halt> halts = {{30.0, 4.0}};
+  auto at = [&](double t) { return DistanceWithHalts(30.0, v, halts, a, t); };
+  EXPECT_DOUBLE_EQ(at(0.0), 30.0);
+  EXPECT_DOUBLE_EQ(at(3.9), 30.0);
+  EXPECT_NEAR(at(5.0), 31.0, 1e-12);
+  EXPECT_NEAR(at(7.0), 39.0, 1e-12);
+  EXPECT_NEAR(at(8.0), 45.0, 1e-12);
+}
+
 TEST(WorldTest, HaltingCarStandsStillOnItsPath) {
   Object o;
   o.parts.resize(1);  // rigid: its part moves with the root
