@@ -54,6 +54,12 @@ int RunGenerate(const GenerateArgs& args) {
                "clear of the others (manifest.json: extra.movers_left_out)\n",
                summary.movers_left_out);
   }
+  if (summary.red_lights_left_out > 0) {
+    fmt::print("note: {} of the scenario's {} red lights were left out: the route has too few intersections, or "
+               "they are too near the start or the light before to brake for at city.camera_speed_mps "
+               "(manifest.json: extra.red_lights_left_out)\n",
+               summary.red_lights_left_out, scenario.city.red_lights);
+  }
   return 0;
 }
 

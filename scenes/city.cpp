@@ -5,6 +5,7 @@
 // right. A node is an intersection (i, j). Everything stands on the ground plane z = 0;
 // sidewalks are raised by kCurbHeightM.
 #include "scenes/builder.h"
+#include "scenes/city_layout.h"
 #include "scenes/person.h"
 #include "scenes/textures.h"
 
@@ -25,28 +26,18 @@ constexpr double kCurbHeightM = 0.15;
 // Parking slot pitch along the curb, as long as a real parallel stall: a car (4.9 m)
 // with room to pull out; a truck (7.2 m) stands only between cars or empty slots.
 constexpr double kSlotLengthM = 6.5;
-constexpr double kCurbGapM = 0.15;     // a parked vehicle's side to the curb
 constexpr double kParkedGapM = 0.3;    // least gap between parked vehicles, bumper to bumper
-
-// Footprints, half length along the heading and half width across it.
-struct VehicleDims {
-  double half_length, half_width;
-};
-constexpr VehicleDims kCarDims{2.45, 1.12}, kTruckDims{3.6, 1.2}, kBusDims{5.6, 1.3};  // cars with mirrors
-// Each side of a street, from the curb: a parking lane as wide as the widest parked
-// vehicle (trucks; buses do not park) with its curb gap, then the driving lane, whose
-// centre line the widest moving vehicle (a bus) keeps 0.2 m clear of the parking lane.
-constexpr double kParkingLaneM = kCurbGapM + 2 * kTruckDims.half_width;
-constexpr double kLaneToParkingM = kBusDims.half_width + 0.2;
+// Vehicle footprints and the street's cross-section (scenes/city_layout.h).
+using namespace city_layout;
 constexpr double kGroundFloorM = 4.2;  // shop floor height
 constexpr double kFloorM = 3.2;        // upper floor height
 constexpr double kBayM = 3.3;          // window bay width
 constexpr int kFacadeFloors = 3, kFacadeBays = 4;
 constexpr double kStopLineM = 4.0;          // stop line, before the edge of the crossing road
-constexpr double kCameraToBumperM = 2.0;    // camera car: from the camera to its front bumper
 constexpr double kQueueGapM = 2.0;          // bumper to bumper, standing in a queue
 constexpr double kCarAccelMps2 = 2.0;       // braking and pulling away at a red light
 constexpr double kReactionS = 1.0;          // the camera car starts this long after the car ahead
+constexpr double kLeadFollowS = 1.0;        // leads cruising one behind the other: time gap
 
 using Vec2 = Eigen::Vector2d;
 using Vec3 = Eigen::Vector3d;
@@ -80,7 +71,7 @@ class CityBuilder {
     block_ = spec_.block_size_m;
     road_ = spec_.road_width_m;
     walk_ = spec_.sidewalk_width_m;
-    lane_ = road_ / 2 - kParkingLaneM - kLaneToParkingM;
+    lane_ = DrivingLaneOffsetM(road_);
     // Two buses passing each other keep 0.2 m apart (the oncoming lane is 0.1 m further
     // out, MakeRouteLanes); Scenario's lower bound on the road width ensures it.
     if (2 * lane_ + 0.1 < 2 * kBusDims.half_width + 0.2) {
@@ -307,34 +298,57 @@ class CityBuilder {
     return NodePos(nodes_[k]) - a * (road_ / 2 + kStopLineM) + Right(a) * lane_;
   }
 
+  // Lights at the candidates spread over the route. The camera car brakes from its
+  // cruising speed at kCarAccelMps2 and must be back at that speed before it brakes for
+  // the next light (DistanceWithHalts), so a light it stands at nearer than v^2 / 2a to the
+  // start or v^2 / a to the light before is passed over for the next candidate; lights
+  // that find none are left out (red_lights_left_out_).
   void PlanRedLights() {
     red_lights_.clear();
     camera_halts_.clear();
+    red_lights_left_out_ = 0;
     if (spec_.red_lights <= 0) return;
     std::mt19937_64 rng = Rng("red_lights");
     const Poly2 lane(lane_pts_);
     // Candidates: every intersection the camera reaches with room to brake before it and
-    // to see the scene after it.
+    // to see the scene after it. The walk goes on past the route's end: an intersection
+    // there has its stop line off the camera's lane (whose nearest point is elsewhere).
     std::vector<RedLight> candidates;
     for (std::size_t k = 1; k < nodes_.size(); ++k) {
       RedLight r;
       r.node = k;
       r.arrive = kStreetDirs[dirs_[k]];
-      r.camera_stop_s = lane.Closest(StopLinePoint(k, r.arrive) - r.arrive * kCameraToBumperM);
-      if (r.camera_stop_s >= 40.0 && r.camera_stop_s <= lane_s_.back() - 15.0) candidates.push_back(r);
+      const Vec2 stop = StopLinePoint(k, r.arrive) - r.arrive * kCameraToBumperM;
+      r.camera_stop_s = lane.Closest(stop);
+      const bool on_route = (lane.At(r.camera_stop_s) - stop).norm() < 0.1;
+      if (on_route && r.camera_stop_s >= 40.0 && r.camera_stop_s <= lane_s_.back() - 15.0) candidates.push_back(r);
     }
+    const double v = spec_.camera_speed_mps;
+    const double brake_m = 0.5 * v * v / kCarAccelMps2;
     const int n = std::min(spec_.red_lights, static_cast<int>(candidates.size()));
+    std::size_t next = 0;  // the first candidate after the last light made
     for (int i = 0; i < n; ++i) {
-      RedLight r = candidates[(2 * i + 1) * candidates.size() / (2 * n)];  // spread over the route
-      if (i % 2 == 0) {
-        // Drawn even where the scenario names the kind, so the other lights draw as before.
-        r.lead_kind = VehicleKind(rng, /*allow_bus=*/true);
-        if (spec_.red_light_lead != "random") r.lead_kind = spec_.red_light_lead;
-        r.camera_stop_s -= 2 * Dims(r.lead_kind).half_length + kQueueGapM;
+      // The first light and every other one after it wait behind a vehicle; its kind is
+      // drawn even where the scenario names it, so the other lights draw as before.
+      std::string lead_kind;
+      if (red_lights_.size() % 2 == 0) {
+        lead_kind = VehicleKind(rng, /*allow_bus=*/true);
+        if (spec_.red_light_lead != "random") lead_kind = spec_.red_light_lead;
       }
-      camera_halts_.push_back({r.camera_stop_s, spec_.red_light_s});
-      red_lights_.push_back(r);
+      for (std::size_t c = std::max(next, (2 * i + 1) * candidates.size() / (2 * n)); c < candidates.size(); ++c) {
+        RedLight r = candidates[c];  // spread over the route
+        r.lead_kind = lead_kind;
+        if (!r.lead_kind.empty()) r.camera_stop_s -= 2 * Dims(r.lead_kind).half_length + kQueueGapM;
+        const bool room = camera_halts_.empty() ? r.camera_stop_s >= brake_m
+                                                : r.camera_stop_s - camera_halts_.back().at_m >= 2 * brake_m;
+        if (!room) continue;
+        camera_halts_.push_back({r.camera_stop_s, spec_.red_light_s});
+        red_lights_.push_back(r);
+        next = c + 1;
+        break;
+      }
     }
+    red_lights_left_out_ = spec_.red_lights - static_cast<int>(red_lights_.size());
     for (RedLight& r : red_lights_) {
       r.stand_from_s = CameraTimeAt(r.camera_stop_s);
       r.stand_until_s = r.stand_from_s + spec_.red_light_s;
@@ -842,10 +856,12 @@ class CityBuilder {
       return p[i - 1] + (seg > 0 ? (s - c[i - 1]) / seg : 0.0) * (p[i] - p[i - 1]);
     }
     Vec2 Tangent(double s) const { return (At(s + 0.5) - At(s - 0.5)).normalized(); }
-    // Arc length of the point nearest to q.
-    double Closest(const Vec2& q) const {
+    // Arc length of the point nearest to q, on the segments that reach into [lo_s, hi_s]
+    // (a lane that passes the same place twice: the pass meant).
+    double Closest(const Vec2& q, double lo_s = -1e18, double hi_s = 1e18) const {
       double best = 1e18, best_s = 0;
       for (std::size_t i = 1; i < p.size(); ++i) {
+        if (c[i] < lo_s || c[i - 1] > hi_s) continue;
         const Vec2 d = p[i] - p[i - 1];
         const double len2 = d.squaredNorm();
         const double u = len2 > 0 ? std::clamp((q - p[i - 1]).dot(d) / len2, 0.0, 1.0) : 0.0;
@@ -946,15 +962,32 @@ class CityBuilder {
   };
   static constexpr double kCarMarginM = 0.3;     // cars keep 0.6 m between bodies
   static constexpr double kPersonMarginM = 0.1;  // people 0.2 m from anyone
+  // Least gap between the camera car's body and a moving vehicle's or a person's, a hard
+  // requirement (CameraCarClear).
+  static constexpr double kCameraCarToVehicleM = 1.0;
+  static constexpr double kCameraCarToPersonM = 0.5;
 
+  // Frame samples of both passes, and the camera car's track at them: a car of kCarDims
+  // whose front bumper is kCameraToBumperM ahead of the camera, heading along the route
+  // (pass 2's camera_offset_m moves it, camera_yaw_offset_deg only turns the camera on it).
   void MakeSamples() {
     samples_.clear();
+    camera_car_ = Track{};
+    camera_car_.half_length = kCarDims.half_length;
+    camera_car_.half_width = kCarDims.half_width;
+    camera_car_.car = true;
+    camera_car_.radius = std::hypot(kCarDims.half_length, kCarDims.half_width);
     for (Pass pass : kBothPasses) {
       sample_stamps_[PassIndex(pass)].clear();
       for (int f = 0; f < world_.frames_per_pass[PassIndex(pass)]; ++f) {
         const double t = FrameStamp(world_, f);
         samples_.push_back({pass, t, CameraPoseAt(world_, pass, t).translation().head<2>()});
         sample_stamps_[PassIndex(pass)].push_back(t);
+        // Both passes keep the same timing: pass 1's optical axis is the route's heading.
+        const Vec2 heading = CameraPoseAt(world_, Pass::kFirst, t).linear().col(2).head<2>().normalized();
+        camera_car_.pos.push_back(samples_.back().camera + (kCameraToBumperM - kCarDims.half_length) * heading);
+        camera_car_.heading.push_back(heading);
+        camera_car_.present.push_back(1);
       }
     }
   }
@@ -1034,12 +1067,29 @@ class CityBuilder {
     return true;
   }
 
+  // Whether the track's body keeps kCameraCarToVehicleM (a car) or kCameraCarToPersonM
+  // from the camera car's at every sample (footprints inflated by half of it each, a
+  // separating-axis ratio >= 1 means that far apart).
+  bool CameraCarClear(const Track& tr) const {
+    const double margin = 0.5 * (tr.car ? kCameraCarToVehicleM : kCameraCarToPersonM);
+    // Pairs further apart than sqrt(2) times the inflated radii are clear (Clearance).
+    const double radii = std::hypot(tr.half_length + margin, tr.half_width + margin) +
+                         std::hypot(camera_car_.half_length + margin, camera_car_.half_width + margin);
+    for (std::size_t i = 0; i < samples_.size(); ++i) {
+      if (!tr.present[i]) continue;
+      if ((camera_car_.pos[i] - tr.pos[i]).squaredNorm() > 2.0 * radii * radii) continue;
+      if (SatRatio(tr, camera_car_, i, margin) < 1.0) return false;
+    }
+    return true;
+  }
+
   // Tries paths from `make(attempt)` on the object (moving, on the same path in each pass
   // it is `present` in, absent from the other) and keeps the clearest of those whose body
-  // touches no other actor's, recording its track. When `attempts` find no such path, up
-  // to three times as many more are tried; when none does either, the object is taken out
-  // of the world again (it is the last one added) and false is returned: a crowd denser
-  // than the streets hold gets fewer actors, never actors that run through each other.
+  // touches no other actor's and keeps clear of the camera car's (CameraCarClear),
+  // recording its track. When `attempts` find no such path, up to three times as many
+  // more are tried; when none does either, the object is taken out of the world again (it
+  // is the last one added) and false is returned: a crowd denser than the streets hold
+  // gets fewer actors, never actors that run through each other or the camera car.
   template <typename MakePath>
   bool PlaceMover(int index, const std::array<bool, 2>& present, double half_length, double half_width, bool car,
                   double min_camera_m, int attempts, MakePath make) {
@@ -1060,7 +1110,8 @@ class CityBuilder {
       // Once a clear path is kept, Clearance may stop as soon as it cannot beat it.
       const double score = Clearance(tr, min_camera_m, best_clear ? best : -1.0);
       if (best_clear && score <= best) continue;
-      const bool clear = score >= 1.0 || BodiesClear(tr);  // margins >= 1: bodies apart
+      // Margins >= 1: bodies apart.
+      const bool clear = (score >= 1.0 || BodiesClear(tr)) && CameraCarClear(tr);
       if (clear != best_clear ? clear : score > best) {
         best = score;
         best_clear = clear;
@@ -1086,22 +1137,41 @@ class CityBuilder {
 
   // The vehicles the camera waits behind at red lights. Each comes along the camera's
   // lane ahead of it at the camera's speed, stands at the stop line from a few seconds
-  // before the camera stands behind it, pulls away kReactionS before the camera does,
-  // and leaves the route at that intersection (straight on where the camera turns,
-  // right where it goes straight), so no two of them meet in the camera's lane.
+  // before the camera would stand behind it had it not stopped at the lights before,
+  // pulls away kReactionS before the camera does, and leaves the route at that
+  // intersection (straight on where the camera turns, right where it goes straight), so
+  // no two of them meet in the camera's lane. It makes no stop before its own: it passes
+  // the lights before ahead of the camera, and ahead of their leads (at least
+  // kQueueGapM + kLeadFollowS of the speed bumper to bumper), before they turn red, and
+  // waits out the camera's stops at its own light. One that would have to brake for its
+  // light before the pass starts brakes from the start (or stands at its stop line from
+  // the start, if braking from there would put it behind a lead before it).
   void MakeRedLightLeads(const std::vector<Node>& fnodes, const Traffic& traffic) {
     std::mt19937_64 rng = Rng("red_light_leads" + traffic.tag);
     const double v = spec_.camera_speed_mps;
-    for (const RedLight& r : red_lights_) {
+    const double ramp_s = v / kCarAccelMps2, ramp_m = 0.5 * v * ramp_s;
+    const double follow_m = kQueueGapM + kLeadFollowS * v;  // bumper to bumper, cruising
+    // Of the leads placed: where each is at t = 0 on the camera's lane (camera arc
+    // length), cruising at v, and its half length.
+    std::vector<std::pair<double, double>> placed;
+    double delay_s = 0.0;  // the camera's, from its stops at the lights before
+    for (std::size_t k = 0; k < red_lights_.size(); ++k) {
+      const RedLight& r = red_lights_[k];
+      if (k > 0) delay_s += camera_halts_[k - 1].wait_s + ramp_s;
       if (r.lead_kind.empty()) continue;
       Object& o = b_.AddObject(r.lead_kind);
       o.parts.push_back(MakeVehicle(rng, o.category_name));
       const int index = static_cast<int>(world_.objects.size()) - 1;
       // Straight lead-in long enough that the start offset stays on the path.
       const double ext_before = v * r.stand_from_s + 200.0;
+      const double camera_start = ext_before + block_ / 2;  // the camera's start on the path
       const Poly2 lane(NodeLane(fnodes, lane_, ext_before, 300.0));
       const Vec2 stop_line = StopLinePoint(r.node, r.arrive);
-      const double stop_arc = lane.Closest(stop_line);
+      // Where the camera's lane meets the stop line, not where the lane's straight
+      // extension past the route's end, or the route again, passes it.
+      const double stop_arc_expected =
+          camera_start + r.camera_stop_s + kCameraToBumperM + 2 * Dims(r.lead_kind).half_length + kQueueGapM;
+      const double stop_arc = lane.Closest(stop_line, stop_arc_expected - 10.0, stop_arc_expected + 10.0);
       std::vector<Vec2> pts;
       for (std::size_t i = 0; i < lane.p.size() && lane.c[i] < stop_arc; ++i) pts.push_back(lane.p[i]);
       pts.push_back(stop_line);
@@ -1117,17 +1187,41 @@ class CityBuilder {
       }
       const VehicleDims dims = Dims(r.lead_kind);
       const double stand_at = stop_arc - dims.half_length;  // its front at the stop line
-      PlaceMover(index, traffic.present, dims.half_length, dims.half_width, /*car=*/true, /*min_camera_m=*/3.15, 40, [&](int) {
+      // Least start offset that keeps it ahead of the leads placed before.
+      double least_start = -1e18;
+      for (const auto& [at_m, half_length] : placed) {
+        least_start = std::max(least_start, camera_start + at_m + half_length + follow_m + dims.half_length);
+      }
+      const double goes_at = r.stand_until_s - kReactionS;
+      const bool kept = PlaceMover(index, traffic.present, dims.half_length, dims.half_width, /*car=*/true,
+                                  /*min_camera_m=*/3.15, 40, [&](int) {
         PathMotion p = DrivePath(pts);
         p.speed_mps = v;
         p.accel_mps2 = kCarAccelMps2;
-        const double stands_from = r.stand_from_s - Uniform(rng, 1.5, 4.0);
-        const double goes_at = r.stand_until_s - kReactionS;
-        p.halts = {{stand_at, goes_at - stands_from}};
-        const double ramp_s = v / kCarAccelMps2, ramp_m = 0.5 * v * ramp_s;
+        double stands_from = r.stand_from_s - (delay_s + Uniform(rng, 1.5, 4.0));
         p.start_offset_m = stand_at - ramp_m - v * (stands_from - ramp_s);
+        if (p.start_offset_m < least_start) {
+          stands_from -= (least_start - p.start_offset_m) / v;
+          p.start_offset_m = stand_at - ramp_m - v * (stands_from - ramp_s);
+        }
+        if (stands_from < ramp_s) {
+          // Too near its light to cruise ahead that long: braking for it from t = 0 (the
+          // camera, braking later from further back, keeps its distance), or, where that
+          // would put it behind a lead placed before, standing there from t = 0.
+          stands_from = ramp_s;
+          p.start_offset_m = stand_at - ramp_m;
+          if (p.start_offset_m < least_start) {
+            stands_from = 0.0;
+            p.start_offset_m = stand_at;
+          }
+        }
+        p.halts = {{stand_at, goes_at - stands_from}};
         return p;
       });
+      if (kept) {
+        const PathMotion& path = world_.objects[index].placement[traffic.present[0] ? 0 : 1].path;
+        placed.push_back({path.start_offset_m - camera_start, dims.half_length});
+      }
     }
   }
 
@@ -1279,12 +1373,13 @@ class CityBuilder {
   // camera), oncoming in the opposite lane, and crossing at the route's intersections.
   void MakeMovingCars(const Traffic& traffic) {
     std::mt19937_64 rng = Rng("moving_cars" + traffic.tag);
+    // The vehicles the camera waits behind are not counted in moving_cars.
+    MakeRedLightLeads(RouteNodes(), traffic);
     if (spec_.moving_cars <= 0) return;
     const RouteLanes lanes = MakeRouteLanes();
     const std::vector<Crossing> crossings = CrossingsOnRoute(lanes);
     const std::vector<double> turns = TurnsOnRoute(lanes);
     const std::vector<CarRole> roles = MovingCarRoles(lanes.two_lanes, !crossings.empty());
-    MakeRedLightLeads(RouteNodes(), traffic);
     const int n_oncoming = static_cast<int>(std::count(roles.begin(), roles.end(), CarRole::kOncoming));
     const int n_crossing = static_cast<int>(std::count(roles.begin(), roles.end(), CarRole::kCrossing));
     int ahead = 0, oncoming = 0, crossing = 0;
@@ -1506,6 +1601,7 @@ class CityBuilder {
  public:
   int parked_candidates_ = 0;
   int movers_left_out_ = 0;
+  int red_lights_left_out_ = 0;
 
  private:
   const Scenario& s_;
@@ -1525,6 +1621,7 @@ class CityBuilder {
   std::vector<Sample> samples_;  // frames of both passes
   std::array<std::vector<double>, 2> sample_stamps_;  // samples_' stamps, per pass
   std::vector<Track> tracks_;    // placed moving actors
+  Track camera_car_;             // the car the camera rides on, at the samples
   std::vector<RedLight> red_lights_;
   std::vector<Halt> camera_halts_;  // the red lights, by camera arc length
 };
@@ -1536,6 +1633,7 @@ World BuildCity(const Scenario& scenario) {
   World world = builder.Build();
   RecordSecondPassChanges(&world, builder.parked_candidates_);
   world.movers_left_out = builder.movers_left_out_;
+  world.red_lights_left_out = builder.red_lights_left_out_;
   return world;
 }
 

@@ -6,6 +6,7 @@
 #include "core/camera.h"
 #include "core/error.h"
 #include "core/lens_distortion.h"
+#include "scenes/city_layout.h"
 
 #include <algorithm>
 #include <cctype>
@@ -140,11 +141,13 @@ class FieldTable {
     Add("city.sidewalk_width_m", Double(&y.sidewalk_width_m, Closed(1.5, 10), "city.sidewalk_width_m"));
     Add("city.parked_cars", Int(&y.parked_cars, 0, 500, "city.parked_cars"));
     Add("city.moving_cars", Int(&y.moving_cars, 0, 100, "city.moving_cars"));
+    // Movers are timed by their speed (crossing cars and people reach a crossing when the
+    // camera is near it): at 0 they would stand where they cross, in the camera's way.
     Add("city.moving_car_speed_mps",
-        Double(&y.moving_car_speed_mps, Closed(0, 30), "city.moving_car_speed_mps"));
+        Double(&y.moving_car_speed_mps, OpenClosed(0, 30), "city.moving_car_speed_mps"));
     Add("city.pedestrians", Int(&y.pedestrians, 0, 300, "city.pedestrians"));
     Add("city.pedestrian_speed_mps",
-        Double(&y.pedestrian_speed_mps, Closed(0, 3), "city.pedestrian_speed_mps"));
+        Double(&y.pedestrian_speed_mps, OpenClosed(0, 3), "city.pedestrian_speed_mps"));
     Add("city.crossing_share", Double(&y.crossing_share, Closed(0, 1), "city.crossing_share"));
     Add("city.red_lights", Int(&y.red_lights, 0, 50, "city.red_lights"));
     Add("city.red_light_s", Double(&y.red_light_s, Closed(1, 120), "city.red_light_s"));
@@ -405,6 +408,42 @@ void CheckLensCoversTheImage(const CameraSpec& camera, const std::string& origin
   }
 }
 
+// The pass-2 camera of a city rides on the camera car as pass 1's does (city_layout.h),
+// moved by pass2.camera_offset_m: it must stay above the road, keep that car within the
+// driving lanes (out of the parked cars' lane), and not move it so far along the route
+// that it runs into the vehicle it waits behind at a red light (2 m ahead of its bumper;
+// movers keep 1 m from it).
+void CheckCityCameraOffset(const Scenario& s, const std::string& origin) {
+  using namespace city_layout;
+  const std::string key = "pass2.camera_offset_m";
+  const Eigen::Vector3d& offset = s.pass2.camera_offset_m;
+  constexpr double kMinHeightM = 0.3;
+  if (s.city.camera_height_m + offset.z() < kMinHeightM) {
+    throw KeyError(origin, key,
+                   "puts the pass-2 camera " + Num(s.city.camera_height_m + offset.z()) +
+                       " m above the road (city.camera_height_m " + Num(s.city.camera_height_m) + " + z " +
+                       Num(offset.z()) + "); it must be at least " + Num(kMinHeightM) + " m");
+  }
+  constexpr double kMaxAlongM = 1.0;
+  if (std::abs(offset.x()) > kMaxAlongM) {
+    throw KeyError(origin, key,
+                   "x (along the route) must be in [-" + Num(kMaxAlongM) + ", " + Num(kMaxAlongM) + "] (got " +
+                       Num(offset.x()) + "): the camera car stands 2 m behind the vehicle it waits behind at "
+                       "a red light, and movers keep 1 m from it");
+  }
+  // The camera car's centre is lane - y right of the street's centre line; its sides, a
+  // half width either side, stay within the driving lanes, `half` either side of that line.
+  const double lane = DrivingLaneOffsetM(s.city.road_width_m);
+  const double half = DrivingLanesHalfWidthM(s.city.road_width_m);
+  const double lo = lane + kCarDims.half_width - half, hi = lane - kCarDims.half_width + half;
+  if (offset.y() < lo || offset.y() > hi) {
+    throw KeyError(origin, key,
+                   "y (to the left) must be in [" + Num(lo) + ", " + Num(hi) + "] for city.road_width_m " +
+                       Num(s.city.road_width_m) + " (got " + Num(offset.y()) + "): further, the camera car (" +
+                       Num(2 * kCarDims.half_width) + " m wide) leaves the driving lanes for a lane of parked cars");
+  }
+}
+
 }  // namespace
 
 Scenario ParseScenario(const std::string& yaml_text, const std::string& origin) {
@@ -476,6 +515,7 @@ Scenario ParseScenario(const std::string& yaml_text, const std::string& origin) 
                    "must leave at least 8 m for buildings after roads and sidewalks (got " +
                        Num(s.city.block_size_m) + ")");
   }
+  if (s.kind == "city") CheckCityCameraOffset(s, origin);
   const bool name_from_file = s.name.empty();
   // A scenario built in code (no file) without a name gets a plain one.
   if (name_from_file) s.name = origin == kBuiltInCodeOrigin ? "scenario" : std::filesystem::path(origin).stem().string();

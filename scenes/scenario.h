@@ -41,8 +41,11 @@ struct SecondPassSpec {
   double relocated_shift_m = 0.0;
   double removed_share = 0.1;    // share removed, [0, 1]
   int added = 2;                 // new parked / moveable objects
-  Eigen::Vector3d camera_offset_m{0.0, 0.0, 0.0};  // offset of the route, route frame
-                                                   // (x forward, y left, z up)
+  // Offset of the route, route frame (x forward, y left, z up), each in [-5, 5]. In a
+  // city the camera rides on a car and the offset moves the car: x in [-1, 1] (it stands
+  // 2 m behind the vehicle it waits behind at a red light), y keeps the car within the
+  // driving lanes ([-0.38, 4.28] on a 12 m road), and the camera at least 0.3 m high.
+  Eigen::Vector3d camera_offset_m{0.0, 0.0, 0.0};
   double camera_yaw_offset_deg = 0.0;              // heading offset of the camera
 };
 
@@ -55,16 +58,19 @@ struct CitySpec {
   double sidewalk_width_m = 3.0;
   int parked_cars = 20;
   int moving_cars = 6;
-  double moving_car_speed_mps = 6.0;
+  double moving_car_speed_mps = 6.0;  // (0, 30]
   int pedestrians = 10;
-  double pedestrian_speed_mps = 1.3;
+  double pedestrian_speed_mps = 1.3;  // (0, 3]
   double crossing_share = 0.3;  // share of pedestrians that cross streets
   // Intersections of the route where the camera car waits at a red light (at most one
   // per intersection, spread over the route). While it waits, cross traffic (the
   // crossing share of moving cars) passes and the crossing pedestrians walk over the
   // crosswalk in front of it. At the first light and every other one after it, it waits
   // behind a vehicle (one more, not counted in moving_cars) that pulls away first when
-  // the light turns green; at the others it is first in line.
+  // the light turns green; at the others it is first in line. An intersection nearer to
+  // the start than the camera car's braking distance at camera_speed_mps (v^2 / 2a, with
+  // a = 2 m/s^2), or nearer to the light before than v^2 / a, is passed over for the next
+  // one; lights that find none are left out (World::red_lights_left_out).
   int red_lights = 0;
   double red_light_s = 12.0;  // standing time at each light
   // The vehicle the camera car waits behind at those lights: random (a car, truck or

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 namespace segslam::scenes {
 namespace {
@@ -122,18 +123,56 @@ double DistanceWithHalts(double start_m, double speed_mps, const std::vector<Hal
   if (v <= 0.0 || a <= 0.0) return start_m + v * t;
   const double ramp_s = v / a, ramp_m = 0.5 * v * v / a;  // time and distance to stop from v
   double delay_s = 0.0;  // behind the schedule of cruising straight through
-  for (const Halt& h : halts) {
-    if (h.at_m - ramp_m < start_m) continue;  // already past (or braking) at t = 0: ignored
-    const double brake_from = (h.at_m - ramp_m - start_m) / v + delay_s;
-    if (t < brake_from) break;
-    const double tau = t - brake_from;
-    if (tau < ramp_s) return h.at_m - ramp_m + v * tau - 0.5 * a * tau * tau;
-    if (tau < ramp_s + h.wait_s) return h.at_m;
-    if (tau < 2.0 * ramp_s + h.wait_s) {
-      const double go = tau - ramp_s - h.wait_s;
-      return h.at_m + 0.5 * a * go * go;
+  // Set while the mover stands at a halt (or starts standing) from which it does not get
+  // back to cruising speed before braking for the next one: when it pulls away, and where.
+  std::optional<double> pull_away_s;
+  double from_m = start_m;
+  for (std::size_t i = 0; i < halts.size(); ++i) {
+    const Halt& h = halts[i];
+    // Pulling away from h, it would still be speeding up where it has to brake for the next.
+    const bool next_near = i + 1 < halts.size() && halts[i + 1].at_m - h.at_m < 2.0 * ramp_m;
+    if (!pull_away_s && h.at_m == start_m) pull_away_s = 0.0;  // a standing start
+    double go_s = 0.0;  // when it pulls away from h
+    if (!pull_away_s) {
+      // Reached at cruising speed: brakes over ramp_m, stands, pulls away over ramp_m.
+      if (h.at_m - ramp_m < start_m) continue;  // already past (or braking) at t = 0: ignored
+      const double brake_from = (h.at_m - ramp_m - start_m) / v + delay_s;
+      if (t < brake_from) break;
+      const double tau = t - brake_from;
+      if (tau < ramp_s) return h.at_m - ramp_m + v * tau - 0.5 * a * tau * tau;
+      if (tau < ramp_s + h.wait_s) return h.at_m;
+      if (!next_near) {
+        if (tau < 2.0 * ramp_s + h.wait_s) {
+          const double go = tau - ramp_s - h.wait_s;
+          return h.at_m + 0.5 * a * go * go;
+        }
+        delay_s += h.wait_s + ramp_s;
+        continue;
+      }
+      go_s = brake_from + ramp_s + h.wait_s;
+    } else {
+      // Reached from standing at from_m, nearer than v^2 / a: speeds up over the first half
+      // of the way and brakes over the second, never reaching cruising speed.
+      const double half_s = std::sqrt(std::max(0.0, h.at_m - from_m) / a);
+      const double tau = t - *pull_away_s;
+      if (tau < half_s) return from_m + 0.5 * a * tau * tau;
+      if (tau < 2.0 * half_s) {
+        const double left = 2.0 * half_s - tau;
+        return h.at_m - 0.5 * a * left * left;
+      }
+      if (tau < 2.0 * half_s + h.wait_s) return h.at_m;
+      go_s = *pull_away_s + 2.0 * half_s + h.wait_s;
+      if (!next_near) {
+        const double go = t - go_s;
+        if (go < ramp_s) return h.at_m + 0.5 * a * go * go;
+        // Back at cruising speed ramp_m past h, ramp_s after pulling away.
+        delay_s = go_s + ramp_s - (h.at_m + ramp_m - start_m) / v;
+        pull_away_s.reset();
+        continue;
+      }
     }
-    delay_s += h.wait_s + ramp_s;
+    pull_away_s = go_s;
+    from_m = h.at_m;
   }
   return start_m + v * (t - delay_s);
 }

@@ -78,10 +78,13 @@ struct Halt {
 };
 
 // Distance travelled at time t by a mover that starts at `start_m`, cruises at speed_mps
-// and makes `halts` (sorted by at_m; one it would have had to start braking for before
-// start_m is ignored), braking and accelerating at accel_mps2. Each halt delays the rest
-// of the trip by wait_s + speed / accel against cruising straight through. Continuous
-// and non-decreasing in t.
+// and makes `halts` (sorted by at_m), braking and accelerating at accel_mps2. A halt at
+// start_m itself is a standing start (it stands there from t = 0 for wait_s); one it would
+// have had to start braking for before start_m otherwise is ignored. Each halt delays the
+// rest of the trip by wait_s + speed / accel against cruising straight through, but for
+// one nearer than speed^2 / accel after the halt before: from there the mover speeds up
+// over half the way and brakes over the other half, never reaching cruising speed (and
+// loses less time). Continuous and non-decreasing in t.
 double DistanceWithHalts(double start_m, double speed_mps, const std::vector<Halt>& halts, double accel_mps2,
                          double t);
 
@@ -182,9 +185,14 @@ struct World {
   std::vector<Light> lights;
   std::array<CameraRoute, 2> camera_route;  // indexed by PassIndex()
   SecondPassChanges pass2_changes;
-  // Moving cars and pedestrians of the scenario left out because no path tried kept their
-  // bodies clear of the others (a city denser than its streets hold).
+  // Moving cars and pedestrians of the scenario (and vehicles the camera car would wait
+  // behind at red lights) left out because no path tried kept their bodies clear of the
+  // others and of the camera car's (a city denser than its streets hold).
   int movers_left_out = 0;
+  // Red lights of the scenario (city.red_lights) left out: the route has too few
+  // intersections, or those it has are too near the start or the light before for the
+  // camera car to brake at its speed and be back at it before the next.
+  int red_lights_left_out = 0;
 };
 
 // Time of frame `index` of a pass, seconds from the start of that pass.

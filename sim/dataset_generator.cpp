@@ -256,6 +256,7 @@ class DatasetGeneration {
                                             : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()))) {
     summary_.gl_renderer = renderer_.gl_renderer();
     summary_.movers_left_out = world_.movers_left_out;
+    summary_.red_lights_left_out = world_.red_lights_left_out;
     if (!world_.camera.distortion.IsZero()) lens_.emplace(renderer_.intrinsics(), world_.camera.distortion);
   }
 
@@ -267,7 +268,8 @@ class DatasetGeneration {
                                        {"seed", scenario_.seed},
                                        {"kind", world_.kind},
                                        {"generator", "segslam generate"},
-                                       {"movers_left_out", world_.movers_left_out}});
+                                       {"movers_left_out", world_.movers_left_out},
+                                       {"red_lights_left_out", world_.red_lights_left_out}});
       if (options_.keep_complete_dataset && fs::exists(target_ / "manifest.json")) {
         summary_.kept_existing = true;  // the staging folder goes with staging_
       } else {

@@ -54,6 +54,7 @@ struct GenerateSummary {
   std::string gl_renderer;     // e.g. "llvmpipe (LLVM 15.0.6, 256 bits)"
   bool kept_existing = false;  // keep_complete_dataset found one there and kept it
   int movers_left_out = 0;     // scenes::World::movers_left_out
+  int red_lights_left_out = 0;  // scenes::World::red_lights_left_out
   double FramesPerSecond() const { return seconds > 0 ? frames / seconds : 0.0; }
 };
 

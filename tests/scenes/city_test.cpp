@@ -394,6 +394,167 @@ TEST(CityTest, CameraWaitsAtRedLightsWhileTrafficAndPeopleCrossInFront) {
   }
 }
 
+// The camera rides on a car 4.9 m by 2.24 m (mirrors included) whose front bumper is 2 m
+// ahead of the camera, heading along the route (pass 1's optical axis; pass 2's
+// camera_offset_m moves it): its footprint at time t of `pass`.
+std::array<Eigen::Vector2d, 4> CameraCarCorners(const World& w, Pass pass, double t) {
+  const Eigen::Vector3d forward = CameraPoseAt(w, Pass::kFirst, t).linear().col(2);
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::AngleAxisd(std::atan2(forward.y(), forward.x()), Eigen::Vector3d::UnitZ()).matrix();
+  T.translation() = CameraPoseAt(w, pass, t).translation();
+  Footprint car;
+  car.lo = Eigen::Vector2d(2.0 - 4.9, -1.12);
+  car.hi = Eigen::Vector2d(2.0, 1.12);
+  return Corners(car, T);
+}
+
+// Vehicles standing right ahead of the camera in its lane at time t (what it waits behind).
+int VehiclesStandingAhead(const World& w, Pass pass, double t) {
+  const Eigen::Isometry3d T_cw = CameraPoseAt(w, pass, t).inverse();
+  int ahead = 0;
+  for (const Object& o : w.objects) {
+    const Placement& p = o.placement[PassIndex(pass)];
+    if (!p.present || !p.moving || !IsVehicle(o)) continue;
+    const Eigen::Vector3d c = T_cw * ObjectPoseAt(o, pass, t).translation();
+    ahead += c.z() > 3.0 && c.z() < 12.0 && std::abs(c.x()) < 1.0 && !ObjectMovesAt(o, pass, t, 0.5);
+  }
+  return ahead;
+}
+
+// With more red lights than rush hour's two, the vehicles the camera waits behind at the
+// third and later ones came along its lane as it stood at the lights before; they now
+// pass those ahead of it and wait at their own. No moving vehicle's body comes within a
+// metre of the camera car's at any frame of either pass, and a vehicle stands ahead at
+// the first light and every other one after it.
+TEST(CityTest, VehiclesKeepClearOfTheCameraCarAtEveryRedLight) {
+  for (const int lights : {2, 3, 4}) {
+    Scenario s = LoadScenario(ScenarioPath("city_rush_hour.yaml"));
+    ApplyOverride(s, "city.red_lights", std::to_string(lights));
+    const World w = BuildWorld(s);
+    const int made = lights - w.red_lights_left_out;
+    std::printf("city_rush_hour.yaml with %d red lights: %d made, %d moving actors left out\n", lights, made,
+                w.movers_left_out);
+    EXPECT_EQ(w.red_lights_left_out, 0) << lights << " red lights: the route has room for them";
+    for (Pass pass : kBothPasses) {
+      SCOPED_TRACE(std::to_string(lights) + " red lights, " + PassName(pass));
+      const auto stretches = StandingStretches(w, pass);
+      ASSERT_EQ(static_cast<int>(stretches.size()), made);
+      for (int k = 0; k < made; ++k) {
+        const double t_mid = FrameStamp(w, (stretches[k].first + stretches[k].second) / 2);
+        EXPECT_EQ(VehiclesStandingAhead(w, pass, t_mid), k % 2 == 0 ? 1 : 0) << "light " << k;
+      }
+      std::vector<std::pair<const Object*, Footprint>> vehicles;
+      for (const Object& o : w.objects) {
+        const Placement& p = o.placement[PassIndex(pass)];
+        if (IsVehicle(o) && p.present && p.moving) vehicles.push_back({&o, FootprintOf(o)});
+      }
+      std::vector<double> closest(vehicles.size(), 1e9);
+      std::vector<int> closest_frame(vehicles.size(), -1);
+      for (int f = 0; f < w.frames_per_pass[PassIndex(pass)]; ++f) {
+        const double t = FrameStamp(w, f);
+        const auto camera_car = CameraCarCorners(w, pass, t);
+        for (std::size_t i = 0; i < vehicles.size(); ++i) {
+          const auto& [o, footprint] = vehicles[i];
+          const double gap = Separation(camera_car, Corners(footprint, ObjectPoseAt(*o, pass, t)));
+          if (gap < closest[i]) closest[i] = gap, closest_frame[i] = f;
+        }
+      }
+      for (std::size_t i = 0; i < vehicles.size(); ++i) {
+        EXPECT_GT(closest[i], /*min_gap_m=*/0.9) << vehicles[i].first->category_name << " "
+                                                 << vehicles[i].first->instance_id << " at frame " << closest_frame[i];
+      }
+    }
+  }
+}
+
+// Distance from the camera, along its heading (on a straight street), to the centre of
+// the next intersection: street centre lines run every block_m.
+double ToNextIntersection(const Eigen::Isometry3d& T_wc, double block_m) {
+  const Eigen::Vector3d forward = T_wc.linear().col(2);
+  const bool along_x = std::abs(forward.x()) > std::abs(forward.y());
+  const double at = along_x ? T_wc.translation().x() : T_wc.translation().y();
+  const bool ahead_positive = (along_x ? forward.x() : forward.y()) > 0;
+  return ahead_positive ? std::ceil(at / block_m) * block_m - at : at - std::floor(at / block_m) * block_m;
+}
+
+// The camera stands at red lights of intersections it drives through: 2 m behind the
+// stop line (4 m before the crossing road, 6 m from its centre line), or a vehicle and
+// 2 m further back. The random walk of streets goes on past the route's end, and an
+// intersection there is no red light of the route.
+TEST(CityTest, RedLightsAreAtIntersectionsOfTheRoute) {
+  for (const int lights : {3, 4}) {
+    Scenario s = LoadScenario(ScenarioPath("city_rush_hour.yaml"));
+    ApplyOverrides(s, {"city.red_lights=" + std::to_string(lights), "city.moving_cars=0", "city.pedestrians=0"});
+    const World w = BuildWorld(s);
+    const auto stretches = StandingStretches(w, Pass::kFirst);
+    ASSERT_EQ(static_cast<int>(stretches.size()), lights);
+    for (std::size_t k = 0; k < stretches.size(); ++k) {
+      const double to_centre = ToNextIntersection(CameraPoseAt(w, Pass::kFirst, FrameStamp(w, stretches[k].first)),
+                                                  s.city.block_size_m);
+      // 12 m first in line, 12 m + a bus (11.2 m) + 2 m at most behind one.
+      EXPECT_GE(to_centre, 12.0 - 0.05) << lights << " red lights, light " << k;
+      EXPECT_LE(to_centre, 12.0 + 11.2 + 2.0 + 0.05) << lights << " red lights, light " << k;
+    }
+  }
+}
+
+// The camera car brakes and pulls away at 2 m/s^2: from 10 m/s it needs 25 m to stop and
+// 50 m between two stops to be back at speed before the next. Lights nearer than that to
+// the start or to the light before are passed over for the next intersection, or left
+// out and counted; the camera never drives backwards, and it stands at every light made.
+TEST(CityTest, CameraNeverDrivesBackwardsAtRedLights) {
+  for (const double speed : {6.0, 10.0, 15.0}) {
+    for (const int lights : {2, 3, 4}) {
+      Scenario s = LoadScenario(ScenarioPath("city_rush_hour.yaml"));
+      ApplyOverrides(s, {"city.camera_speed_mps=" + std::to_string(speed), "city.red_lights=" + std::to_string(lights),
+                         "city.moving_cars=0", "city.pedestrians=0"});
+      const World w = BuildWorld(s);
+      SCOPED_TRACE(std::to_string(speed) + " m/s, " + std::to_string(lights) + " red lights");
+      std::printf("city_rush_hour.yaml at %.0f m/s with %d red lights: %d left out\n", speed, lights,
+                  w.red_lights_left_out);
+      EXPECT_GE(w.red_lights_left_out, 0);
+      if (speed == 6.0) {
+        EXPECT_EQ(w.red_lights_left_out, 0);
+      }
+      for (Pass pass : kBothPasses) {
+        double worst_back = 0;
+        int worst_frame = -1;
+        for (int f = 1; f < w.frames_per_pass[PassIndex(pass)]; ++f) {
+          const Eigen::Isometry3d before = CameraPoseAt(w, pass, FrameStamp(w, f - 1));
+          const Eigen::Vector3d step = CameraPoseAt(w, pass, FrameStamp(w, f)).translation() - before.translation();
+          const Eigen::Vector2d forward = before.linear().col(2).head<2>().normalized();
+          if (-step.head<2>().dot(forward) > worst_back) worst_back = -step.head<2>().dot(forward), worst_frame = f;
+        }
+        EXPECT_LT(worst_back, 1e-6) << PassName(pass) << " frame " << worst_frame;
+        const auto stretches = StandingStretches(w, pass);
+        ASSERT_EQ(static_cast<int>(stretches.size()), lights - w.red_lights_left_out) << PassName(pass);
+        // At the first light made and every other one after it, behind a vehicle.
+        for (std::size_t k = 0; k < stretches.size(); ++k) {
+          const double t_mid = FrameStamp(w, (stretches[k].first + stretches[k].second) / 2);
+          EXPECT_EQ(VehiclesStandingAhead(w, pass, t_mid), k % 2 == 0 ? 1 : 0) << PassName(pass) << " light " << k;
+        }
+      }
+    }
+  }
+}
+
+// The vehicles the camera waits behind are not counted in city.moving_cars: with none,
+// the camera still waits behind one at the first light, not behind nothing.
+TEST(CityTest, RedLightLeadsComeWithoutMovingCars) {
+  Scenario s = SmallCityScenario();
+  ApplyOverrides(s, {"city.route_length_m=130", "city.red_lights=2", "city.red_light_s=6", "city.moving_cars=0",
+                     "city.pedestrians=0"});
+  const World w = BuildWorld(s);
+  for (Pass pass : kBothPasses) {
+    const auto stretches = StandingStretches(w, pass);
+    ASSERT_EQ(stretches.size(), 2u) << PassName(pass);
+    for (std::size_t k = 0; k < stretches.size(); ++k) {
+      const double t_mid = FrameStamp(w, (stretches[k].first + stretches[k].second) / 2);
+      EXPECT_EQ(VehiclesStandingAhead(w, pass, t_mid), k == 0 ? 1 : 0) << PassName(pass) << " light " << k;
+    }
+  }
+}
+
 // city.red_light_lead picks the vehicle the camera waits behind; the rest of the world is
 // drawn as with "random", so a study of the lead changes only the lead.
 TEST(CityTest, RedLightLeadIsTheVehicleKindAsked) {

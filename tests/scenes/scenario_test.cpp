@@ -102,6 +102,53 @@ TEST(ScenarioTest, OutOfRangeNamesKeyAndValue) {
   EXPECT_EQ(ParseScenario("sensor: {min_depth_m: 10, max_depth_m: 0}\n", "ok.yaml").sensor.min_depth_m, 10);
 }
 
+// Crossing cars and people are timed by their speed to cross when the camera is near: at
+// 0 m/s they would stand where they cross, in the camera's way.
+TEST(ScenarioTest, CityMoversMustMove) {
+  EXPECT_EQ(ParseError("city: {moving_car_speed_mps: 0}\n"),
+            "my.yaml: city.moving_car_speed_mps: must be in (0, 30] (got 0)");
+  EXPECT_EQ(ParseError("city: {pedestrian_speed_mps: 0}\n"),
+            "my.yaml: city.pedestrian_speed_mps: must be in (0, 3] (got 0)");
+  EXPECT_EQ(ParseError("city: {moving_car_speed_mps: 0.5, pedestrian_speed_mps: 0.2}\n"), "");
+}
+
+// A city's pass-2 camera rides on the camera car as pass 1's does: the offset keeps it
+// above the road and that car within the driving lanes (default road: its lane's centre
+// 1.95 m right of the centre line, the driving lanes 3.45 m either side of it, the car
+// 2.24 m wide), and not so far along the route that it runs into the vehicle it waits
+// behind at a red light.
+TEST(ScenarioTest, CityCameraOffsetKeepsTheCameraCarOnTheRoad) {
+  EXPECT_EQ(ParseError("pass2: {camera_offset_m: [0, 0, -2]}\n"),
+            "my.yaml: pass2.camera_offset_m: puts the pass-2 camera -0.5 m above the road (city.camera_height_m "
+            "1.5 + z -2); it must be at least 0.3 m");
+  EXPECT_EQ(ParseError("pass2: {camera_offset_m: [0, -1.7, 0]}\n"),
+            "my.yaml: pass2.camera_offset_m: y (to the left) must be in [-0.38, 4.28] for city.road_width_m 12 (got "
+            "-1.7): further, the camera car (2.24 m wide) leaves the driving lanes for a lane of parked cars");
+  EXPECT_NE(ParseError("pass2: {camera_offset_m: [0, 4.5, 0]}\n").find("y (to the left) must be in"),
+            std::string::npos);
+  EXPECT_EQ(ParseError("pass2: {camera_offset_m: [4, 0, 0]}\n"),
+            "my.yaml: pass2.camera_offset_m: x (along the route) must be in [-1, 1] (got 4): the camera car "
+            "stands 2 m behind the vehicle it waits behind at a red light, and movers keep 1 m from it");
+  EXPECT_NE(ParseError("pass2: {camera_offset_m: [-1.5, 0, 0]}\n").find("x (along the route)"), std::string::npos);
+  // Within the bounds; a wider road has room for more.
+  EXPECT_EQ(ParseError("pass2: {camera_offset_m: [1, -0.35, -1.2]}\n"), "");
+  EXPECT_EQ(ParseError("pass2: {camera_offset_m: [-1, 4.2, 0]}\n"), "");
+  EXPECT_EQ(ParseError("city: {road_width_m: 20}\npass2: {camera_offset_m: [0, 5, 0]}\n"), "");
+  EXPECT_EQ(ParseError("city: {camera_height_m: 0.5}\npass2: {camera_offset_m: [0, 0, -0.2]}\n"), "");
+  // Offices have no lanes.
+  EXPECT_EQ(ParseError("kind: office\npass2: {camera_offset_m: [0, -1.7, -1]}\n"), "");
+  // An override is checked the same way, naming the scenario file.
+  Scenario s = LoadScenario(ScenarioPath("city_two_pass.yaml"));
+  try {
+    ApplyOverride(s, "pass2.camera_offset_m", "[0, -1.7, 0]");
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("city_two_pass.yaml: pass2.camera_offset_m: y (to the left)"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(ScenarioTest, WrongTypesAreRefused) {
   EXPECT_EQ(ParseError("camera:\n  fps: fast\n"), "my.yaml: camera.fps: expected a number (got 'fast')");
   EXPECT_EQ(ParseError("city: {parked_cars: 2.5}\n"), "my.yaml: city.parked_cars: expected an integer (got '2.5')");

@@ -225,6 +225,50 @@ TEST(WorldTest, HaltBrakesStandsAndPullsAwayWithKnownTimes) {
   EXPECT_NEAR(DistanceWithHalts(start, v, two, a, 40.0), start + v * (40.0 - 8.0 - 5.0), 1e-12);
 }
 
+// Halts nearer than v^2 / a after the one before: the mover cannot get back to its
+// cruising speed between them, so it speeds up over half the way and brakes over the
+// other half. A car at 10 m/s braking at 2 m/s^2 takes 5 s and 25 m to stop.
+TEST(WorldTest, NearHaltsAreReachedWithoutCruisingNeverBackwards) {
+  const double v = 10.0, a = 2.0;
+  const std::vector<Halt> halts = {{40.0, 3.0}, {67.0, 3.0}, {70.0, 1.0}, {200.0, 2.0}};
+  auto at = [&](double t) { return DistanceWithHalts(0.0, v, halts, a, t); };
+  // Braking from 15 m at 1.5 s, standing at 40 m from 6.5 s to 9.5 s.
+  EXPECT_NEAR(at(1.5), 15.0, 1e-12);
+  EXPECT_DOUBLE_EQ(at(8.0), 40.0);
+  // 27 m to the next: sqrt(13.5) s speeding up over 13.5 m, as long braking over the rest.
+  const double hop_s = std::sqrt(13.5);
+  EXPECT_NEAR(at(9.5 + hop_s), 53.5, 1e-9);
+  EXPECT_NEAR(at(9.5 + 2 * hop_s + 1.5), 67.0, 1e-12);
+  // 3 m on to the third (sqrt(1.5) s each way), 1 s there, then back to speed over 25 m.
+  const double at_70_s = 9.5 + 2 * hop_s + 3.0 + 2 * std::sqrt(1.5);
+  EXPECT_NEAR(at(at_70_s + 0.5), 70.0, 1e-12);
+  EXPECT_NEAR(at(at_70_s + 6.0), 95.0, 1e-9);
+  EXPECT_NEAR(at(at_70_s + 7.0), 105.0, 1e-9);
+  // The fourth, far enough from the third, as usual: braking from 175 m.
+  EXPECT_NEAR(at(at_70_s + 6.0 + 8.0 + 5.0 + 1.0), 200.0, 1e-9);
+  // Never backwards, no jumps, never faster than cruising.
+  const double dt = 0.001;
+  double worst_back = 0, worst_step = 0;
+  for (double t = 0; t < 60.0; t += dt) {
+    worst_back = std::max(worst_back, at(t) - at(t + dt));
+    worst_step = std::max(worst_step, at(t + dt) - at(t));
+  }
+  EXPECT_LE(worst_back, 1e-12);
+  EXPECT_LE(worst_step, v * dt + 1e-9);
+}
+
+// A halt at the start itself: the mover stands there from t = 0, then pulls away.
+TEST(WorldTest, HaltAtTheStartIsAStandingStart) {
+  const double v = 6.0, a = 2.0;
+  const std::vector<Halt> halts = {{30.0, 4.0}};
+  auto at = [&](double t) { return DistanceWithHalts(30.0, v, halts, a, t); };
+  EXPECT_DOUBLE_EQ(at(0.0), 30.0);
+  EXPECT_DOUBLE_EQ(at(3.9), 30.0);
+  EXPECT_NEAR(at(5.0), 31.0, 1e-12);
+  EXPECT_NEAR(at(7.0), 39.0, 1e-12);
+  EXPECT_NEAR(at(8.0), 45.0, 1e-12);
+}
+
 TEST(WorldTest, HaltingCarStandsStillOnItsPath) {
   Object o;
   o.parts.resize(1);  // rigid: its part moves with the root
