@@ -39,6 +39,16 @@ constexpr double kCarAccelMps2 = 2.0;       // braking and pulling away at a red
 constexpr double kReactionS = 1.0;          // the camera car starts this long after the car ahead
 constexpr double kLeadFollowS = 1.0;        // leads cruising one behind the other: time gap
 
+// Across a sidewalk, from the curb: trees and lamp posts on one line, benches with their
+// backs to the buildings. Pedestrians walk in the strip between, their bodies clear.
+constexpr double kFurnitureLineM = 0.7;        // trunks' and posts' centres
+constexpr double kMaxTrunkRadiusM = 0.2;
+constexpr double kBenchFromFarEdgeM = 0.45;    // a bench's centre, from the sidewalk's far edge
+constexpr double kBenchFrontM = 0.22;          // its seat's front, ahead of its centre
+constexpr double kWalkerClearanceM = 0.3;      // a pedestrian's half-width, and a little
+constexpr double kWalkStripNearM = kFurnitureLineM + kMaxTrunkRadiusM + kWalkerClearanceM;
+constexpr double kWalkStripFarM = kBenchFromFarEdgeM + kBenchFrontM + kWalkerClearanceM;  // from the far edge
+
 using Vec2 = Eigen::Vector2d;
 using Vec3 = Eigen::Vector3d;
 using Node = std::pair<int, int>;
@@ -482,7 +492,7 @@ class CityBuilder {
       double s = clear + Uniform(rng, 0, 4);
       int k = 0;
       while (s < block_ - clear) {
-        const Vec2 p = pa + d * s + curb + out * 0.7;
+        const Vec2 p = pa + d * s + curb + out * kFurnitureLineM;
         if (k % 3 == 1) {
           MakeLamp(p, -out);
         } else {
@@ -512,7 +522,7 @@ class CityBuilder {
       }
       // A few fixed COCO objects near the route: benches and hydrants.
       if (on_route && Chance(rng, 0.5)) {
-        MakeBench(pa + d * Uniform(rng, clear + 2, block_ - clear - 2) + curb + out * (walk_ - 0.45), YawOf(-out));
+        MakeBench(pa + d * Uniform(rng, clear + 2, block_ - clear - 2) + curb + out * (walk_ - kBenchFromFarEdgeM), YawOf(-out));
       }
       if (on_route && Chance(rng, 0.5)) {
         MakeHydrant(pa + d * Uniform(rng, clear, block_ - clear) + curb + out * 0.45);
@@ -1459,6 +1469,13 @@ class CityBuilder {
     return crosswalks;
   }
 
+  // How far from the curb a pedestrian walks along a sidewalk: drawn over its middle and
+  // kept in the strip between the trees and lamps and the benches (the scenario's
+  // smallest sidewalk leaves that strip room).
+  double SidewalkLineFromCurb(std::mt19937_64& rng) const {
+    return std::clamp(walk_ * Uniform(rng, 0.45, 0.6), kWalkStripNearM, walk_ - kWalkStripFarM);
+  }
+
   // Crossing pedestrian k of `crossers` at `speed`, attempt `a` of its placement: over a
   // crosswalk (spread by k for the first attempts), in the middle of the street when the
   // camera is 16-32 m before it; at a red light, while the camera stands, and off the
@@ -1467,7 +1484,7 @@ class CityBuilder {
                                   int crossers, double speed, int a) const {
     const Crosswalk& c = crosswalks[(k * crosswalks.size() / crossers + a / 4) % crosswalks.size()];
     const double side = Chance(rng, 0.5) ? 1.0 : -1.0;  // starts right (+1) or left
-    const double w = road_ / 2 + walk_ * Uniform(rng, 0.45, 0.6);
+    const double w = road_ / 2 + SidewalkLineFromCurb(rng);
     // A crowd at a red light spreads over the crosswalk's width (the far part: the near
     // edge is 2.5 m from the camera) to pass each other, and keeps to the sidewalks of the
     // camera's street before and after, off the way the camera takes when the light turns
@@ -1511,7 +1528,7 @@ class CityBuilder {
     if (along.x() != 0) axis.y() = block_ * std::round(axis.y() / block_);  // snap to the street line
     else axis.x() = block_ * std::round(axis.x() / block_);
     const double side = (rank + a) % 2 == 0 ? 1.0 : -1.0;
-    const Vec2 at = axis + Right(along) * side * (road_ / 2 + walk_ * Uniform(rng, 0.45, 0.6));
+    const Vec2 at = axis + Right(along) * side * (road_ / 2 + SidewalkLineFromCurb(rng));
     const double heading = Chance(rng, 0.5) ? 1.0 : -1.0;
     const double leg = 80.0;
     PathMotion p = WalkPath({at - along * heading * leg, at + along * heading * leg});

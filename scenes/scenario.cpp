@@ -138,7 +138,8 @@ class FieldTable {
     Add("city.block_size_m", Double(&y.block_size_m, Closed(25, 200), "city.block_size_m"));
     // Two parking lanes (2.55 m) and two driving lanes where two buses pass (city.cpp).
     Add("city.road_width_m", Double(&y.road_width_m, Closed(11, 30), "city.road_width_m"));
-    Add("city.sidewalk_width_m", Double(&y.sidewalk_width_m, Closed(1.5, 10), "city.sidewalk_width_m"));
+    // From 2.5 m, pedestrians walk between the trees and the benches (scenes/city.cpp).
+    Add("city.sidewalk_width_m", Double(&y.sidewalk_width_m, Closed(2.5, 10), "city.sidewalk_width_m"));
     Add("city.parked_cars", Int(&y.parked_cars, 0, 500, "city.parked_cars"));
     Add("city.moving_cars", Int(&y.moving_cars, 0, 100, "city.moving_cars"));
     // Movers are timed by their speed (crossing cars and people reach a crossing when the

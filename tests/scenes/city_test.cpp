@@ -1,3 +1,4 @@
+#include "core/error.h"
 #include "scenes/scenario.h"
 #include "scenes/world.h"
 
@@ -668,6 +669,66 @@ TEST(CityTest, VehiclesNeverTouchEachOther) {
       EXPECT_GT(closest, 0.0) << file << " " << PassName(pass) << ": a moving vehicle runs into a parked one";
     }
   }
+}
+
+// Pedestrians walk along the sidewalks between the trees and lamp posts and the
+// benches, on the narrowest sidewalk a scenario may ask for too, and a narrower one is
+// refused.
+TEST(CityTest, PedestriansWalkClearOfStreetFurniture) {
+  constexpr double kBodyRadiusM = 0.25;
+  for (const std::string width : {"default", "2.5", "4"}) {
+    Scenario s = LoadScenario(ScenarioPath("city_two_pass.yaml"));
+    ApplyOverride(s, "city.pedestrians", "30");
+    if (width != "default") ApplyOverride(s, "city.sidewalk_width_m", width);
+    const World w = BuildWorld(s);
+    // Trunks and posts: vertical cylinders of bark or dark metal, as circles on the ground.
+    std::vector<std::pair<Eigen::Vector2d, double>> posts;
+    for (const Geom& g : w.static_geoms) {
+      const std::string& material = w.materials[g.material].name;
+      if (g.shape != Shape::kCylinder || (material != "bark" && material != "dark_metal")) continue;
+      if (std::abs(g.T_parent_geom.linear()(2, 2)) < 0.99) continue;  // lamp arms, wheels
+      posts.push_back({g.T_parent_geom.translation().head<2>(), g.size.x()});
+    }
+    ASSERT_GT(posts.size(), 20u);
+    int touches = 0;
+    for (Pass pass : kBothPasses) {
+      std::vector<std::pair<Footprint, Eigen::Isometry3d>> benches;
+      for (const Object& o : w.objects) {
+        const Placement& p = o.placement[PassIndex(pass)];
+        if (o.category_name == "bench" && p.present) benches.push_back({FootprintOf(o), p.T_world_object});
+      }
+      for (const Object& o : w.objects) {
+        if (o.articulation != Articulation::kWalker || !o.placement[PassIndex(pass)].present) continue;
+        for (int f = 0; f < w.frames_per_pass[PassIndex(pass)]; ++f) {
+          const Eigen::Vector3d at = ObjectPoseAt(o, pass, FrameStamp(w, f)).translation();
+          std::string what;
+          for (const auto& [centre, radius] : posts) {
+            if ((at.head<2>() - centre).norm() < radius + kBodyRadiusM) what = "a trunk or post";
+          }
+          for (const auto& [footprint, T] : benches) {
+            const Eigen::Vector2d local = (T.inverse() * at).head<2>();
+            const Eigen::Vector2d nearest = local.cwiseMax(footprint.lo).cwiseMin(footprint.hi);
+            if ((local - nearest).norm() < kBodyRadiusM) what = "a bench";
+          }
+          if (what.empty()) continue;
+          if (++touches <= 5) {
+            ADD_FAILURE() << "sidewalk " << width << " m, " << PassName(pass) << ": person " << o.instance_id
+                          << " walks through " << what << " at frame " << f;
+          }
+          break;
+        }
+      }
+    }
+    std::printf("city_two_pass.yaml, sidewalk %s m: %d pedestrians walk through street furniture\n", width.c_str(),
+                touches);
+    EXPECT_EQ(touches, 0) << "sidewalk " << width << " m";
+  }
+}
+
+
+TEST(CityTest, SidewalksTooNarrowToWalkPastTheirFurnitureAreRefused) {
+  Scenario s = LoadScenario(ScenarioPath("city_two_pass.yaml"));
+  EXPECT_THROW(ApplyOverride(s, "city.sidewalk_width_m", "2"), Error);
 }
 
 }  // namespace
