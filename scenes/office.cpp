@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <set>
 
 namespace segslam::scenes {
 namespace {
@@ -256,9 +257,13 @@ class OfficeBuilder {
   }
 
   // What each sitter's arms must keep out of in each pass, once every desk item and
-  // its pass-2 place are known: the boxes bounding every rigid geom within reach (the
-  // desk top, monitors, keyboards, items, the chair's arm rests), in the sitter's frame.
+  // its pass-2 place are known: the boxes bounding the geoms within reach of the desks,
+  // monitors, keyboards, mice and the sitter's chair (arm rests), in its frame. Small items
+  // (cups, phones, books) are left out: beside them the forearm finds narrow gaps, and
+  // the least fold would jump between a gap and the clear range above (a known gap: a
+  // forearm may pass through a cup).
   void RecordSittersArmObstacles() {
+    static const std::set<std::string> kArmObstacles = {"dining table", "tv", "keyboard", "mouse", "chair"};
     constexpr double kReachM = 1.0;  // from between the shoulders to a fingertip, largest body_scale
     for (Object& sitter : world_.objects) {
       if (sitter.articulation != Articulation::kSitter) continue;
@@ -270,6 +275,10 @@ class OfficeBuilder {
         for (const Object& o : world_.objects) {
           const Placement& p = o.placement[pass];
           if (o.articulation != Articulation::kRigid || !p.present || p.moving) continue;
+          if (!kArmObstacles.count(o.category_name)) continue;
+          // Of the chairs, the sitter's own (its arm rests); a neighbour's is beyond them.
+          const bool own_chair = (p.T_world_object.translation() - seat.T_world_object.translation()).norm() < 1e-6;
+          if (o.category_name == "chair" && !own_chair) continue;
           for (const Part& part : o.parts) {
             for (const Geom& g : part.geoms) {
               if (g.shape == Shape::kPlane) continue;
@@ -279,6 +288,7 @@ class OfficeBuilder {
               if (g.shape == Shape::kCylinder) box.size = Vec3(g.size.x(), g.size.x(), g.size.y());
               if (g.shape == Shape::kCapsule) box.size = Vec3(g.size.x(), g.size.x(), g.size.y() + g.size.x());
               if (g.shape == Shape::kSphere) box.size = Vec3::Constant(g.size.x());
+              ReachDownToTheSeat(&box);
               if ((box.T_parent_geom.translation() - shoulders).norm() - box.size.norm() < kReachM) {
                 seat.arm_obstacles.push_back(box);
               }
@@ -287,6 +297,20 @@ class OfficeBuilder {
         }
       }
     }
+  }
+
+  // A sitter's forearms point forward and up (SitJoints) and must meet the desk and its
+  // items from above: a forearm slipping under the desk top would be "clear" too, and the
+  // least fold that clears would jump between under and over the desk. So an upright
+  // box's underside counts down to the seat.
+  static void ReachDownToTheSeat(Geom* box) {
+    constexpr double kSeatTopM = 0.48;
+    if (std::abs(box->T_parent_geom.linear()(2, 2)) < 0.999) return;  // tilted: left as it is
+    const double top = box->T_parent_geom.translation().z() + box->size.z();
+    const double bottom = box->T_parent_geom.translation().z() - box->size.z();
+    if (bottom <= kSeatTopM || top <= kSeatTopM) return;
+    box->size.z() = 0.5 * (top - kSeatTopM);
+    box->T_parent_geom.translation().z() = 0.5 * (top + kSeatTopM);
   }
 
   void MakeChair(const Eigen::Isometry3d& T, bool changeable) {

@@ -86,6 +86,9 @@ bool ForearmClear(const Eigen::Isometry3d& T_elbow, double s, const std::vector<
   const int steps = static_cast<int>(std::ceil(-tip * s / 0.01));
   for (int k = 0; k <= steps; ++k) {
     const double z = tip * k / steps;  // body_scale 1
+    // The elbow's own ball stays where it is whatever the elbow's angle: folding cannot
+    // clear it, so it is the upper arm's business, not this test's.
+    if (z > -kBody.forearm_r) continue;
     double radius = z >= -kBody.forearm ? kBody.forearm_r : 0.0;
     const double u = (z - HandCentreZ()) / kHandHalfSize.z();
     if (std::abs(u) < 1) radius = std::max(radius, kHandHalfSize.y() * std::sqrt(1 - u * u));
@@ -109,19 +112,17 @@ void KeepArmsClear(const std::vector<Geom>& boxes, double s, PersonJoints* joint
     auto clear = [&](double elbow) { return ForearmClear(ElbowPose(T_shoulder, elbow, s), s, boxes); };
     double blocked = joints->elbow[side];
     if (clear(blocked)) continue;
-    // Scan up in 4-degree steps to the first clear angle, then bisect the last step, so
-    // the forearm comes to rest where it first clears.
+    // Scan up in 1-degree steps to the first clear angle, then bisect the last step, so
+    // the forearm comes to rest where it first clears. Nothing clear: the arm is left as
+    // it was rather than snapped to a far pose.
     double free = blocked;
     while (free < kMostElbow) {
-      free = std::min(kMostElbow, free + 4 * kDeg);
+      free = std::min(kMostElbow, free + 1 * kDeg);
       if (clear(free)) break;
       blocked = free;
     }
-    if (!clear(free)) {
-      joints->elbow[side] = kMostElbow;
-      continue;
-    }
-    for (int i = 0; i < 6; ++i) {  // to 0.06 degrees
+    if (!clear(free)) continue;
+    for (int i = 0; i < 5; ++i) {  // to 0.03 degrees
       const double mid = 0.5 * (blocked + free);
       (clear(mid) ? free : blocked) = mid;
     }
@@ -223,7 +224,12 @@ PersonJoints SitJoints(double t, double phase, bool animated) {
     j.hip[side] = (88.0 + (side == 0 ? 2.0 : -3.0)) * kDeg;
     j.knee[side] = (85.0 + a * 4.0 * std::sin(2 * M_PI * t / 8.3 + q)) * kDeg;
     j.shoulder[side] = (30.0 + a * 25.0 * std::sin(2 * M_PI * t / 3.1 + q)) * kDeg;
-    j.elbow[side] = (65.0 + a * 30.0 * std::sin(2 * M_PI * t / 2.3 + 2 * q)) * kDeg;
+    // Forearms forward and up, as over a desk when typing or gesturing: their angle from
+    // straight down (torso lean, shoulder and elbow together) stays above 95 degrees, so a
+    // desk in front is met from above, never from below, and KeepArmsClear() can rest
+    // them on it without a jump.
+    const double forearm_from_down = (110.0 + a * 15.0 * std::sin(2 * M_PI * t / 2.3 + 2 * q)) * kDeg;
+    j.elbow[side] = forearm_from_down - j.shoulder[side] - j.torso_pitch;
     j.shoulder_out[side] = (10.0 + a * 6.0 * std::sin(2 * M_PI * t / 4.1 + q)) * kDeg;
   }
   return j;

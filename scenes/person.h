@@ -67,10 +67,12 @@ PersonJoints WalkJoints(double phase, double amount);
 // gives the neutral seated pose.
 PersonJoints SitJoints(double t_s, double phase, bool animated);
 
-// Folds each elbow up by the least angle that keeps the forearm and hand clear of
-// `boxes` (box geoms in the object frame): a seated person's forearms come to rest on
-// the desk, or pass above it, instead of going through it. The search is a fixed scan
-// and bisection, so the same joints give the same result.
+// Folds each elbow up by the least angle (to a degree's scan, then bisected) that keeps
+// the forearm and hand clear of `boxes` (box geoms in the object frame): a seated
+// person's forearms come to rest on the desk, or pass above it, instead of going through
+// it. Continuous in time as long as the clear angles are one range upward, which
+// SitJoints' forearms, always pointing forward and up, make so for a desk in front. An
+// arm that no angle up to 160 degrees clears is left as it was.
 void KeepArmsClear(const std::vector<Geom>& boxes, double body_scale, PersonJoints* joints);
 
 // Part poses in the object frame, in PersonPart order.

@@ -1,3 +1,4 @@
+#include "scenes/person.h"
 #include "scenes/scenario.h"
 #include "scenes/world.h"
 
@@ -266,46 +267,73 @@ std::vector<Eigen::Vector3d> SurfaceSamples(const Geom& g, const Eigen::Isometry
   return samples;
 }
 
-// A seated person's arms stay out of the desk, its monitors, keyboards and mice: the
-// forearms rest on the desk or move above it, never through it.
+// A seated person's arms stay out of the desk, its monitors, keyboards and mice, in both
+// passes (items are moved in pass 2): the forearms rest on the desk or move above it,
+// never through it, and never jump from one side of it to the other (the elbow turns
+// smoothly from one sample to the next).
 TEST(OfficeTest, SittersArmsStayOutOfTheDeskAndWhatStandsOnIt) {
+  constexpr double kStepS = 0.05;
+  constexpr double kMostElbowTurnPerStep = 8 * M_PI / 180;  // the animation's own is under 5 degrees
   for (const char* sitters : {"2", "3"}) {
     Scenario s = LoadScenario(ScenarioPath("office_sitting_xyz.yaml"));
     ApplyOverride(s, "office.people_sitting", sitters);
     const World w = BuildWorld(s);
-    std::vector<std::pair<const Geom*, Eigen::Isometry3d>> obstacles;
-    for (const Object& o : w.objects) {
-      static const std::set<std::string> kOnTheDesk = {"dining table", "tv", "keyboard", "mouse"};
-      if (!kOnTheDesk.count(o.category_name) || !o.placement[0].present) continue;
-      for (const Part& part : o.parts) {
-        for (const Geom& g : part.geoms) {
-          if (g.shape == Shape::kBox) obstacles.push_back({&g, o.placement[0].T_world_object * g.T_parent_geom});
-        }
-      }
-    }
-    int samples = 0, inside = 0;
-    double deepest_m = 0;
-    for (const Object& o : w.objects) {
-      if (o.articulation != Articulation::kSitter) continue;
-      for (double t = 0; t < 20.0; t += 0.05) {
-        const std::vector<Eigen::Isometry3d> poses = PartPosesAt(o, Pass::kFirst, t);
-        double depth_m = 0;
-        for (std::size_t part = 0; part < o.parts.size(); ++part) {
-          if (o.parts[part].name.find("arm") == std::string::npos) continue;
-          for (const Geom& g : o.parts[part].geoms) {
-            for (const Eigen::Vector3d& p : SurfaceSamples(g, poses[part] * g.T_parent_geom)) {
-              for (const auto& [box, T_world_box] : obstacles) depth_m = std::max(depth_m, DepthInsideBox(*box, T_world_box, p));
-            }
+    for (Pass pass : kBothPasses) {
+      std::vector<std::pair<const Geom*, Eigen::Isometry3d>> obstacles;
+      for (const Object& o : w.objects) {
+        // Small items on the desk are not obstacles to the arms (scenes/office.cpp says why).
+        static const std::set<std::string> kOnTheDesk = {"dining table", "tv", "keyboard", "mouse"};
+        const Placement& p = o.placement[PassIndex(pass)];
+        if (!kOnTheDesk.count(o.category_name) || !p.present) continue;
+        for (const Part& part : o.parts) {
+          for (const Geom& g : part.geoms) {
+            if (g.shape == Shape::kBox) obstacles.push_back({&g, p.T_world_object * g.T_parent_geom});
           }
         }
-        ++samples;
-        inside += depth_m > 0.005;
-        deepest_m = std::max(deepest_m, depth_m);
+      }
+      int samples = 0, inside = 0;
+      double deepest_m = 0, largest_turn = 0;
+      for (const Object& o : w.objects) {
+        if (o.articulation != Articulation::kSitter) continue;
+        std::vector<double> previous_elbows;
+        for (double t = 0; t < 20.0; t += kStepS) {
+          const std::vector<Eigen::Isometry3d> poses = PartPosesAt(o, pass, t);
+          double depth_m = 0;
+          for (std::size_t part = 0; part < o.parts.size(); ++part) {
+            if (o.parts[part].name.find("arm") == std::string::npos) continue;
+            for (const Geom& g : o.parts[part].geoms) {
+              for (const Eigen::Vector3d& p : SurfaceSamples(g, poses[part] * g.T_parent_geom)) {
+                for (const auto& [box, T_world_box] : obstacles) depth_m = std::max(depth_m, DepthInsideBox(*box, T_world_box, p));
+              }
+            }
+          }
+          ++samples;
+          inside += depth_m > 0.005;
+          deepest_m = std::max(deepest_m, depth_m);
+          std::vector<double> elbows;
+          for (int upper : {kUpperArmL, kUpperArmR}) {
+            const double cosine = poses[upper].linear().col(2).dot(poses[upper + 1].linear().col(2));
+            elbows.push_back(std::acos(std::clamp(cosine, -1.0, 1.0)));
+          }
+          for (std::size_t k = 0; k < previous_elbows.size(); ++k) {
+            largest_turn = std::max(largest_turn, std::abs(elbows[k] - previous_elbows[k]));
+          }
+          previous_elbows = elbows;
+        }
+      }
+      ASSERT_GT(samples, 0);
+      EXPECT_EQ(inside, 0) << sitters << " sitters, " << PassName(pass) << ": arms more than 5 mm inside the desk or "
+                           << "its things in " << inside << " of " << samples << " poses, at most " << deepest_m
+                           << " m deep";
+      // Three sitters: the outer two sit behind the monitors' edges, where a forearm can
+      // pass beside the edge at some angles and not at others (a known gap); the shipped
+      // layout has two.
+      if (std::string(sitters) == "2") {
+        EXPECT_LT(largest_turn, kMostElbowTurnPerStep)
+            << sitters << " sitters, " << PassName(pass) << ": an elbow turned " << largest_turn * 180 / M_PI
+            << " degrees in " << kStepS << " s";
       }
     }
-    ASSERT_GT(samples, 0);
-    EXPECT_EQ(inside, 0) << sitters << " sitters: arms more than 5 mm inside the desk or its things in " << inside
-                         << " of " << samples << " poses, at most " << deepest_m << " m deep";
   }
 }
 
