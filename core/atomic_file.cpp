@@ -88,8 +88,9 @@ void StagingDirectory::Commit() {
     // The constructor's check is long past: another run may have made the target since.
     // RENAME_NOREPLACE refuses atomically instead of replacing that run's output.
     int result = ::renameat2(AT_FDCWD, staging_.c_str(), AT_FDCWD, target_.c_str(), RENAME_NOREPLACE);
-    if (result != 0 && errno == EINVAL) {
-      // A file system without RENAME_NOREPLACE (e.g. NFS): check, then rename; that
+    if (result != 0 && (errno == EINVAL || errno == ENOSYS || errno == EPERM)) {
+      // A file system without RENAME_NOREPLACE (e.g. NFS), or a kernel or sandbox without
+      // renameat2 (ENOSYS, or EPERM from some seccomp filters): check, then rename; that
       // leaves a short window for a race, not one as long as the whole run.
       std::error_code ignored;
       if (fs::exists(target_, ignored)) {

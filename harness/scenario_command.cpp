@@ -400,8 +400,10 @@ ScenarioReport RunScenarioToReport(const ScenarioRunRequest& args) {
   ScenarioReport report;
   report.dataset_from_cache = EnsureDataset(scenario, dataset, args, backend, cancel);
   // Datasets of older builds have no count: none were left out then.
-  report.movers_left_out =
-      ReadJsonFile(dataset / "manifest.json").value("extra", nlohmann::json::object()).value("movers_left_out", 0);
+  const nlohmann::json extra =
+      ReadJsonFile(dataset / "manifest.json").value("extra", nlohmann::json::object());
+  report.movers_left_out = extra.value("movers_left_out", 0);
+  report.red_lights_left_out = extra.value("red_lights_left_out", 0);
   fs::create_directories(report_dir / "runs");
   std::vector<RepeatRun> runs = PlanRuns(bench);
   std::fflush(stdout);

@@ -714,6 +714,7 @@ nlohmann::json ScenarioReport::ToJson() const {
       {"dataset", dataset_dir},
       {"dataset_from_cache", dataset_from_cache},
       {"dataset_movers_left_out", movers_left_out},
+      {"dataset_red_lights_left_out", red_lights_left_out},
       {"frames_per_pass", frames_per_pass},
       {"bench",
        {{"modes", bench.modes}, {"repeats", bench.repeats}, {"segmenter", bench.segmenter},
@@ -763,7 +764,12 @@ ReportDocument ScenarioReport::ToDocument() const {
                                       (movers_left_out > 0 ? fmt::format(", {} of the scenario's moving cars and pedestrians "
                                                                          "left out (no path clear of the others)",
                                                                          movers_left_out)
-                                                           : ""));
+                                                           : "") +
+                                      (red_lights_left_out > 0
+                                           ? fmt::format(", {} of the scenario's red lights left out (too few "
+                                                         "intersections, or too near to brake for)",
+                                                         red_lights_left_out)
+                                           : ""));
   document.AddMetadata("bench", fmt::format("modes {}, {} repeat(s), segmenter {} with seeds {}..{}; deterministic modes "
                                             "ran once",
                                             Join(bench.modes, ", "), bench.repeats, bench.SegmenterLabel(), bench.seed,

@@ -132,6 +132,7 @@ struct ScenarioReport {
   std::string dataset_dir;
   bool dataset_from_cache = false;
   int movers_left_out = 0;  // the dataset's moving actors without a clear path (manifest.json)
+  int red_lights_left_out = 0;  // the scenario's red lights the route had no room for (manifest.json)
   int frames_per_pass = 0;  // --frames; 0 = the scenario's own
   BenchSettings bench;
   std::vector<RepeatRun> runs;

@@ -39,15 +39,6 @@ constexpr double kCarAccelMps2 = 2.0;       // braking and pulling away at a red
 constexpr double kReactionS = 1.0;          // the camera car starts this long after the car ahead
 constexpr double kLeadFollowS = 1.0;        // leads cruising one behind the other: time gap
 
-// Across a sidewalk, from the curb: trees and lamp posts on one line, benches with their
-// backs to the buildings. Pedestrians walk in the strip between, their bodies clear.
-constexpr double kFurnitureLineM = 0.7;        // trunks' and posts' centres
-constexpr double kMaxTrunkRadiusM = 0.2;
-constexpr double kBenchFromFarEdgeM = 0.45;    // a bench's centre, from the sidewalk's far edge
-constexpr double kBenchFrontM = 0.22;          // its seat's front, ahead of its centre
-constexpr double kWalkerClearanceM = 0.3;      // a pedestrian's half-width, and a little
-constexpr double kWalkStripNearM = kFurnitureLineM + kMaxTrunkRadiusM + kWalkerClearanceM;
-constexpr double kWalkStripFarM = kBenchFromFarEdgeM + kBenchFrontM + kWalkerClearanceM;  // from the far edge
 
 using Vec2 = Eigen::Vector2d;
 using Vec3 = Eigen::Vector3d;

@@ -32,4 +32,17 @@ constexpr double DrivingLaneOffsetM(double road_width_m) {
 // centre line.
 constexpr double DrivingLanesHalfWidthM(double road_width_m) { return road_width_m / 2 - kParkingLaneM; }
 
+// Across a sidewalk, from the curb: trees and lamp posts on one line, benches with their
+// backs to the buildings. Pedestrians walk in the strip between, their bodies clear.
+constexpr double kFurnitureLineM = 0.7;      // trunks' and posts' centres
+constexpr double kMaxTrunkRadiusM = 0.2;
+constexpr double kBenchFromFarEdgeM = 0.45;  // a bench's centre, from the sidewalk's far edge
+constexpr double kBenchFrontM = 0.22;        // its seat's front, ahead of its centre
+constexpr double kWalkerClearanceM = 0.3;    // a pedestrian's half-width, and a little
+constexpr double kWalkStripNearM = kFurnitureLineM + kMaxTrunkRadiusM + kWalkerClearanceM;
+constexpr double kWalkStripFarM = kBenchFromFarEdgeM + kBenchFrontM + kWalkerClearanceM;  // from the far edge
+// The narrowest sidewalk a scenario may ask for (city.sidewalk_width_m): the strip exists.
+constexpr double kMinSidewalkWidthM = 2.5;
+static_assert(kWalkStripNearM <= kMinSidewalkWidthM - kWalkStripFarM, "no walking strip on the narrowest sidewalk");
+
 }  // namespace segslam::scenes::city_layout

@@ -138,8 +138,9 @@ class FieldTable {
     Add("city.block_size_m", Double(&y.block_size_m, Closed(25, 200), "city.block_size_m"));
     // Two parking lanes (2.55 m) and two driving lanes where two buses pass (city.cpp).
     Add("city.road_width_m", Double(&y.road_width_m, Closed(11, 30), "city.road_width_m"));
-    // From 2.5 m, pedestrians walk between the trees and the benches (scenes/city.cpp).
-    Add("city.sidewalk_width_m", Double(&y.sidewalk_width_m, Closed(2.5, 10), "city.sidewalk_width_m"));
+    // Narrower, pedestrians could not walk between the trees and the benches.
+    Add("city.sidewalk_width_m",
+        Double(&y.sidewalk_width_m, Closed(city_layout::kMinSidewalkWidthM, 10), "city.sidewalk_width_m"));
     Add("city.parked_cars", Int(&y.parked_cars, 0, 500, "city.parked_cars"));
     Add("city.moving_cars", Int(&y.moving_cars, 0, 100, "city.moving_cars"));
     // Movers are timed by their speed (crossing cars and people reach a crossing when the
@@ -425,7 +426,8 @@ void CheckCityCameraOffset(const Scenario& s, const std::string& origin) {
                        " m above the road (city.camera_height_m " + Num(s.city.camera_height_m) + " + z " +
                        Num(offset.z()) + "); it must be at least " + Num(kMinHeightM) + " m");
   }
-  constexpr double kMaxAlongM = 1.0;
+  // Below the 1 m the movers keep, so that a lead is not at the limit of being left out.
+  constexpr double kMaxAlongM = 0.8;
   if (std::abs(offset.x()) > kMaxAlongM) {
     throw KeyError(origin, key,
                    "x (along the route) must be in [-" + Num(kMaxAlongM) + ", " + Num(kMaxAlongM) + "] (got " +

@@ -119,6 +119,7 @@ TEST_F(ScenarioCliTest, TinyRunWritesTheReportAndItsExitCodeFollowsTheThresholds
   EXPECT_FALSE(results["code_version"].get<std::string>().empty());
   EXPECT_GT(results["machine"]["cores"].get<int>(), 0);
   EXPECT_EQ(results["dataset_movers_left_out"], 0);  // the small office's two people have room
+  EXPECT_EQ(results["dataset_red_lights_left_out"], 0);
   // plain is deterministic: one run; mutual: two seeds.
   ASSERT_EQ(results["runs"].size(), 3u);
   EXPECT_EQ(results["runs"][1]["seed"], 4);

@@ -127,12 +127,12 @@ TEST(ScenarioTest, CityCameraOffsetKeepsTheCameraCarOnTheRoad) {
   EXPECT_NE(ParseError("pass2: {camera_offset_m: [0, 4.5, 0]}\n").find("y (to the left) must be in"),
             std::string::npos);
   EXPECT_EQ(ParseError("pass2: {camera_offset_m: [4, 0, 0]}\n"),
-            "my.yaml: pass2.camera_offset_m: x (along the route) must be in [-1, 1] (got 4): the camera car "
+            "my.yaml: pass2.camera_offset_m: x (along the route) must be in [-0.8, 0.8] (got 4): the camera car "
             "stands 2 m behind the vehicle it waits behind at a red light, and movers keep 1 m from it");
   EXPECT_NE(ParseError("pass2: {camera_offset_m: [-1.5, 0, 0]}\n").find("x (along the route)"), std::string::npos);
   // Within the bounds; a wider road has room for more.
-  EXPECT_EQ(ParseError("pass2: {camera_offset_m: [1, -0.35, -1.2]}\n"), "");
-  EXPECT_EQ(ParseError("pass2: {camera_offset_m: [-1, 4.2, 0]}\n"), "");
+  EXPECT_EQ(ParseError("pass2: {camera_offset_m: [0.8, -0.35, -1.2]}\n"), "");
+  EXPECT_EQ(ParseError("pass2: {camera_offset_m: [-0.8, 4.2, 0]}\n"), "");
   EXPECT_EQ(ParseError("city: {road_width_m: 20}\npass2: {camera_offset_m: [0, 5, 0]}\n"), "");
   EXPECT_EQ(ParseError("city: {camera_height_m: 0.5}\npass2: {camera_offset_m: [0, 0, -0.2]}\n"), "");
   // Offices have no lanes.
