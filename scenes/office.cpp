@@ -299,8 +299,8 @@ class OfficeBuilder {
     }
   }
 
-  // A sitter's forearms point forward and up (SitJoints) and must meet the desk and its
-  // items from above: a forearm slipping under the desk top would be "clear" too, and the
+  // A sitter's forearms point forward and up (SitJoints) and must meet the desk and what
+  // stands on it from above: a forearm slipping under the desk top would be "clear" too, and the
   // least fold that clears would jump between under and over the desk. So an upright
   // box's underside counts down to the seat.
   static void ReachDownToTheSeat(Geom* box) {

@@ -70,17 +70,23 @@ Eigen::Isometry3d ElbowPose(const Eigen::Isometry3d& T_shoulder, double elbow, d
 const Eigen::Vector3d kHandHalfSize(0.03, 0.045, 0.08);
 double HandCentreZ() { return -kBody.forearm - 0.06; }
 
-// Distance from p to a box geom, negative inside (by the depth to its nearest face).
-double SignedDistanceToBox(const Geom& box, const Eigen::Vector3d& p_parent) {
-  const Eigen::Vector3d q = (box.T_parent_geom.inverse() * p_parent).cwiseAbs() - box.size;
+// A box geom as the clearance test reads it: the map into its frame, and its half size.
+struct Obstacle {
+  Eigen::Isometry3d T_box_parent;
+  Eigen::Vector3d half_size;
+};
+
+// Distance from p to the box, negative inside (by the depth to its nearest face).
+double SignedDistanceToBox(const Obstacle& box, const Eigen::Vector3d& p_parent) {
+  const Eigen::Vector3d q = (box.T_box_parent * p_parent).cwiseAbs() - box.half_size;
   const double inside = std::min(q.maxCoeff(), 0.0);
   return q.cwiseMax(0.0).norm() + inside;
 }
 
-// True when the forearm and hand, posed at T_elbow, keep `margin_m` from every box:
-// their axis is sampled every centimetre or less, each sample with the limb's radius
-// there (the capsule's, then the hand's width tapering to its tip).
-bool ForearmClear(const Eigen::Isometry3d& T_elbow, double s, const std::vector<Geom>& boxes) {
+// True when the forearm and hand, posed at T_elbow, keep kMarginM from every box: their
+// axis is sampled every centimetre or less, each sample with the limb's radius there
+// (the capsule's, then the hand's width tapering to its tip).
+bool ForearmClear(const Eigen::Isometry3d& T_elbow, double s, const std::vector<Obstacle>& boxes) {
   constexpr double kMarginM = 0.003;
   const double tip = HandCentreZ() - kHandHalfSize.z();
   const int steps = static_cast<int>(std::ceil(-tip * s / 0.01));
@@ -93,7 +99,7 @@ bool ForearmClear(const Eigen::Isometry3d& T_elbow, double s, const std::vector<
     const double u = (z - HandCentreZ()) / kHandHalfSize.z();
     if (std::abs(u) < 1) radius = std::max(radius, kHandHalfSize.y() * std::sqrt(1 - u * u));
     const Eigen::Vector3d p = T_elbow * Eigen::Vector3d(0, 0, z * s);
-    for (const Geom& box : boxes) {
+    for (const Obstacle& box : boxes) {
       if (SignedDistanceToBox(box, p) < radius * s + kMarginM) return false;
     }
   }
@@ -106,22 +112,26 @@ void KeepArmsClear(const std::vector<Geom>& boxes, double s, PersonJoints* joint
   if (boxes.empty()) return;
   constexpr double kDeg = M_PI / 180.0;
   constexpr double kMostElbow = 160 * kDeg;  // the hand at the shoulder
+  std::vector<Obstacle> obstacles;
+  obstacles.reserve(boxes.size());
+  for (const Geom& box : boxes) obstacles.push_back({box.T_parent_geom.inverse(), box.size});
   const std::vector<Eigen::Isometry3d> poses = PersonPartPoses(*joints, s);
   for (int side = 0; side < 2; ++side) {
     const Eigen::Isometry3d& T_shoulder = poses[kUpperArmL + 2 * side];
-    auto clear = [&](double elbow) { return ForearmClear(ElbowPose(T_shoulder, elbow, s), s, boxes); };
+    auto clear = [&](double elbow) { return ForearmClear(ElbowPose(T_shoulder, elbow, s), s, obstacles); };
     double blocked = joints->elbow[side];
     if (clear(blocked)) continue;
     // Scan up in 1-degree steps to the first clear angle, then bisect the last step, so
     // the forearm comes to rest where it first clears. Nothing clear: the arm is left as
     // it was rather than snapped to a far pose.
     double free = blocked;
-    while (free < kMostElbow) {
-      free = std::min(kMostElbow, free + 1 * kDeg);
-      if (clear(free)) break;
+    bool found = false;
+    while (!found && free < kMostElbow) {
       blocked = free;
+      free = std::min(kMostElbow, free + 1 * kDeg);
+      found = clear(free);
     }
-    if (!clear(free)) continue;
+    if (!found) continue;
     for (int i = 0; i < 5; ++i) {  // to 0.03 degrees
       const double mid = 0.5 * (blocked + free);
       (clear(mid) ? free : blocked) = mid;
