@@ -931,6 +931,42 @@ class CityBuilder {
     return path;
   }
 
+  // Lengthens an open path at both ends so that the mover is on it for the whole of both
+  // passes: before its start or past its end it would stand still there, and movers timed
+  // to meet the camera late (or early) would stand in a heap at their paths' ends. Walking
+  // paths gain points every metre (on the sidewalk or the street, as WalkPath's).
+  void CoverBothPasses(PathMotion& path, bool walking) const {
+    if (path.closed || path.waypoints.size() < 2) return;
+    const double last_s = (std::max(world_.frames_per_pass[0], world_.frames_per_pass[1]) - 1) / s_.camera.fps;
+    const auto extension_points = [&](const Eigen::Vector3d& end, const Eigen::Vector3d& inner, double extra_m) {
+      const Vec2 from = end.head<2>();
+      const Vec2 dir = (from - inner.head<2>()).normalized();
+      std::vector<Eigen::Vector3d> pts;  // outward from `end`, the farthest last
+      const int n = walking ? std::max(1, static_cast<int>(std::ceil(extra_m))) : 1;
+      for (int k = 1; k <= n; ++k) {
+        const Vec2 q = from + dir * (extra_m * k / n);
+        pts.push_back(At(q, walking && OnBlock(q) ? kCurbHeightM : 0.0));
+      }
+      return pts;
+    };
+    constexpr double kSlackM = 1.0;
+    const double before_m = kSlackM - PathDistanceAt(path, 0.0);
+    if (before_m > 0) {
+      std::vector<Eigen::Vector3d> pts = extension_points(path.waypoints[0], path.waypoints[1], before_m);
+      path.waypoints.insert(path.waypoints.begin(), pts.rbegin(), pts.rend());
+      path.start_offset_m += before_m;
+      for (Halt& h : path.halts) h.at_m += before_m;
+    }
+    double length_m = 0;
+    for (std::size_t i = 1; i < path.waypoints.size(); ++i) length_m += (path.waypoints[i] - path.waypoints[i - 1]).norm();
+    const double after_m = PathDistanceAt(path, last_s) + kSlackM - length_m;
+    if (after_m > 0) {
+      const std::size_t n = path.waypoints.size();
+      std::vector<Eigen::Vector3d> pts = extension_points(path.waypoints[n - 1], path.waypoints[n - 2], after_m);
+      path.waypoints.insert(path.waypoints.end(), pts.begin(), pts.end());
+    }
+  }
+
   static PathMotion DrivePath(const std::vector<Vec2>& pts) {
     PathMotion path;
     path.closed = false;
@@ -1104,6 +1140,7 @@ class CityBuilder {
       p.present = true;
       p.moving = true;
       p.path = make(a);
+      CoverBothPasses(p.path, /*walking=*/!car);
       Placement absent;
       absent.present = false;
       o.placement = {present[0] ? p : absent, present[1] ? p : absent};

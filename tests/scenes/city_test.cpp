@@ -671,6 +671,36 @@ TEST(CityTest, VehiclesNeverTouchEachOther) {
   }
 }
 
+double PathLength(const PathMotion& path) {
+  double length = 0;
+  for (std::size_t i = 1; i < path.waypoints.size(); ++i) length += (path.waypoints[i] - path.waypoints[i - 1]).norm();
+  return length;
+}
+
+// A mover timed to meet the camera late (or early) must not stand at its path's start
+// (or end) meanwhile: movers in a heap there touched each other and were left out (12 of
+// rush hour's), and stood still where the camera could see them.
+TEST(CityTest, MoversAreOnTheirPathsForTheWholePass) {
+  for (const std::string file : {"city_two_pass.yaml", "city_rush_hour.yaml"}) {
+    const World w = BuildWorld(LoadScenario(ScenarioPath(file)));
+    int movers = 0;
+    for (Pass pass : kBothPasses) {
+      const double last_s = FrameStamp(w, w.frames_per_pass[PassIndex(pass)] - 1);
+      for (const Object& o : w.objects) {
+        const Placement& p = o.placement[PassIndex(pass)];
+        if (!p.present || !p.moving) continue;
+        ASSERT_FALSE(p.path.closed) << file << ": " << o.category_name << " " << o.instance_id;
+        ++movers;
+        EXPECT_GE(PathDistanceAt(p.path, 0.0), 0.0) << file << " " << PassName(pass) << ": " << o.category_name << " "
+                                                    << o.instance_id << " stands at its path's start";
+        EXPECT_LE(PathDistanceAt(p.path, last_s), PathLength(p.path))
+            << file << " " << PassName(pass) << ": " << o.category_name << " " << o.instance_id << " stands at its path's end";
+      }
+    }
+    EXPECT_GT(movers, 20) << file;
+  }
+}
+
 // Pedestrians walk along the sidewalks between the trees and lamp posts and the
 // benches, on the narrowest sidewalk a scenario may ask for too, and a narrower one is
 // refused.
