@@ -1503,6 +1503,15 @@ class CityBuilder {
   double SidewalkLineFromCurb(std::mt19937_64& rng) const {
     return std::clamp(walk_ * Uniform(rng, 0.45, 0.6), kWalkStripNearM, walk_ - kWalkStripFarM);
   }
+  // The same, keeping right: the strip's half toward the buildings for one walking with
+  // them on the right hand, toward the curb otherwise, the halves a body's width apart
+  // so that people meeting each other pass. A strip too narrow for that is shared.
+  double KeepRightLineFromCurb(std::mt19937_64& rng, bool buildings_on_the_right) const {
+    const double near = kWalkStripNearM, far = walk_ - kWalkStripFarM;
+    const double band = 0.5 * (far - near - 2 * kWalkerClearanceM);
+    if (band < 0) return SidewalkLineFromCurb(rng);
+    return buildings_on_the_right ? Uniform(rng, far - band, far) : Uniform(rng, near, near + band);
+  }
 
   // Crossing pedestrian k of `crossers` at `speed`, attempt `a` of its placement: over a
   // crosswalk (spread by k for the first attempts), in the middle of the street when the
@@ -1512,18 +1521,19 @@ class CityBuilder {
                                   int crossers, double speed, int a) const {
     const Crosswalk& c = crosswalks[(k * crosswalks.size() / crossers + a / 4) % crosswalks.size()];
     const double side = Chance(rng, 0.5) ? 1.0 : -1.0;  // starts right (+1) or left
-    const double w = road_ / 2 + SidewalkLineFromCurb(rng);
-    // A crowd at a red light spreads over the crosswalk's width (the far part: the near
-    // edge is 2.5 m from the camera) to pass each other, and keeps to the sidewalks of the
-    // camera's street before and after, off the way the camera takes when the light turns
-    // green.
-    const Vec2 line = c.centre + c.along * (c.light ? Uniform(rng, -0.5, 1.3) : 0.0);
-    const Vec2 from = line + Right(c.along) * side * w, to = line - Right(c.along) * side * w;
+    // Walking towards the crosswalk (+along at a light) with the buildings on the right
+    // on the right-hand sidewalk, and away from it after crossing, the same on the other.
     double before = -1.0, after = -1.0;
-    if (!c.light) {
-      before = Chance(rng, 0.5) ? 1.0 : -1.0;
-      after = Chance(rng, 0.5) ? 1.0 : -1.0;
-    }
+    if (!c.light) before = after = Chance(rng, 0.5) ? 1.0 : -1.0;
+    const double w = road_ / 2 + KeepRightLineFromCurb(rng, -before * side > 0);
+    // A crowd at a red light keeps to the far part of the crosswalk (the near edge is
+    // 2.5 m from the camera) and to the sidewalks of the camera's street before and after,
+    // off the way the camera takes when the light turns green. Keeping right on the
+    // crosswalk too, those starting on the right take its +along half.
+    const double across = c.light ? (side > 0 ? Uniform(rng, 0.5, 1.3) : Uniform(rng, -0.5, -0.1))
+                                  : side * Uniform(rng, 0.3, 1.2);
+    const Vec2 line = c.centre + c.along * across;
+    const Vec2 from = line + Right(c.along) * side * w, to = line - Right(c.along) * side * w;
     const double leg = 60.0;
     PathMotion p = WalkPath({from + c.along * before * leg, from, to, to + c.along * after * leg});
     p.speed_mps = speed;
@@ -1556,8 +1566,8 @@ class CityBuilder {
     if (along.x() != 0) axis.y() = block_ * std::round(axis.y() / block_);  // snap to the street line
     else axis.x() = block_ * std::round(axis.x() / block_);
     const double side = (rank + a) % 2 == 0 ? 1.0 : -1.0;
-    const Vec2 at = axis + Right(along) * side * (road_ / 2 + SidewalkLineFromCurb(rng));
     const double heading = Chance(rng, 0.5) ? 1.0 : -1.0;
+    const Vec2 at = axis + Right(along) * side * (road_ / 2 + KeepRightLineFromCurb(rng, heading * side > 0));
     const double leg = 80.0;
     PathMotion p = WalkPath({at - along * heading * leg, at + along * heading * leg});
     p.speed_mps = speed;

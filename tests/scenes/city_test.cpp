@@ -1,4 +1,5 @@
 #include "core/error.h"
+#include "scenes/city_layout.h"
 #include "scenes/scenario.h"
 #include "scenes/world.h"
 
@@ -755,6 +756,58 @@ TEST(CityTest, PedestriansWalkClearOfStreetFurniture) {
   }
 }
 
+
+// People walking along a sidewalk keep right: the building-side half of its walking strip
+// with the buildings on their right hand, the curb-side half otherwise, the halves a
+// body's width apart, so that people meeting each other pass (with one line for all, 24
+// of this city's 120 walkers were left out; 14 now).
+TEST(CityTest, PedestriansKeepRightOnTheSidewalks) {
+  Scenario s = LoadScenario(ScenarioPath("city_two_pass.yaml"));
+  ApplyOverride(s, "city.pedestrians", "60");
+  const World w = BuildWorld(s);
+  std::printf("city_two_pass.yaml with 60 pedestrians: %d movers left out\n", w.movers_left_out);
+  const double block = s.city.block_size_m, road = s.city.road_width_m, walk = s.city.sidewalk_width_m;
+  const double near = city_layout::kWalkStripNearM, far = walk - city_layout::kWalkStripFarM;
+  const double band = 0.5 * (far - near - 2 * city_layout::kWalkerClearanceM);
+  ASSERT_GT(band, 0.0);
+  int samples = 0, wrong = 0;
+  for (Pass pass : kBothPasses) {
+    for (const Object& o : w.objects) {
+      if (o.articulation != Articulation::kWalker || !o.placement[PassIndex(pass)].present) continue;
+      for (int f = 0; f + 1 < w.frames_per_pass[PassIndex(pass)]; f += 5) {
+        const Eigen::Vector3d p0 = ObjectPoseAt(o, pass, FrameStamp(w, f)).translation();
+        const Eigen::Vector3d p1 = ObjectPoseAt(o, pass, FrameStamp(w, f + 1)).translation();
+        if (p0.z() < 0.1) continue;  // on the street, or beyond the city's blocks
+        const Eigen::Vector2d step = (p1 - p0).head<2>();
+        if (step.norm() < 0.05) continue;
+        const Eigen::Vector2d heading = step.normalized();
+        if (heading.cwiseAbs().maxCoeff() < 0.999) continue;  // not along a street
+        const bool along_x = std::abs(heading.x()) > std::abs(heading.y());
+        const double across = along_x ? p0.y() : p0.x(), along = along_x ? p0.x() : p0.y();
+        // Near an intersection a sidewalk turns the corner: not counted.
+        if (std::abs(along - block * std::round(along / block)) < road / 2 + walk) continue;
+        const double centre_line = block * std::round(across / block);
+        const double from_curb = std::abs(across - centre_line) - road / 2;
+        ASSERT_GT(from_curb, 0.0) << "person " << o.instance_id << " raised, but on the street";
+        const double outward_sign = across > centre_line ? 1.0 : -1.0;
+        const Eigen::Vector2d outward = along_x ? Eigen::Vector2d(0, outward_sign) : Eigen::Vector2d(outward_sign, 0);
+        const Eigen::Vector2d right_hand(heading.y(), -heading.x());
+        const bool buildings_on_the_right = right_hand.dot(outward) > 0;
+        ++samples;
+        const bool kept_right =
+            buildings_on_the_right ? from_curb >= far - band - 1e-6 : from_curb <= near + band + 1e-6;
+        if (!kept_right && ++wrong <= 5) {
+          ADD_FAILURE() << PassName(pass) << ": person " << o.instance_id << " at frame " << f << " walks "
+                        << from_curb << " m from the curb with the buildings on its "
+                        << (buildings_on_the_right ? "right" : "left");
+        }
+      }
+    }
+  }
+  std::printf("%d samples of people walking along sidewalks, %d not keeping right\n", samples, wrong);
+  EXPECT_GT(samples, 500);
+  EXPECT_EQ(wrong, 0);
+}
 
 TEST(CityTest, SidewalksTooNarrowToWalkPastTheirFurnitureAreRefused) {
   Scenario s = LoadScenario(ScenarioPath("city_two_pass.yaml"));
