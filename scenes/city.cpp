@@ -1521,8 +1521,10 @@ class CityBuilder {
                                   int crossers, double speed, int a) const {
     const Crosswalk& c = crosswalks[(k * crosswalks.size() / crossers + a / 4) % crosswalks.size()];
     const double side = Chance(rng, 0.5) ? 1.0 : -1.0;  // starts right (+1) or left
-    // Walking towards the crosswalk (+along at a light) with the buildings on the right
-    // on the right-hand sidewalk, and away from it after crossing, the same on the other.
+    // Keeping right on the sidewalks: the first leg walks -before * along towards the
+    // crosswalk on this side, the last one after * along away from it on the other (at a
+    // light both back the way the camera came). With after = before both legs have the
+    // buildings on the same hand, so one line from the curb keeps right on both.
     double before = -1.0, after = -1.0;
     if (!c.light) before = after = Chance(rng, 0.5) ? 1.0 : -1.0;
     const double w = road_ / 2 + KeepRightLineFromCurb(rng, -before * side > 0);
