@@ -22,7 +22,7 @@ namespace segslam::slam {
 namespace {
 
 using testing::BoxQuads;
-using testing::LookingAlongX;
+using testing::HandHeldPathPose;
 using testing::RenderedFrame;
 using testing::RenderQuads;
 using testing::RoomQuads;
@@ -31,13 +31,8 @@ constexpr std::uint16_t kBoxId = 1;
 
 PinholeCamera TestCamera() { return PinholeCamera::FromVerticalFov(640, 480, 50); }
 
-// The hand-held path of tracker_test.cpp, by frame index: the camera's motion per frame
-// stays the same whatever the frames' stamps.
-Eigen::Isometry3d PathPose(int i) {
-  const double t = i / 30.0;
-  return LookingAlongX(Eigen::Vector3d(-2.0 + 0.25 * t, 0.3 * std::sin(1.3 * t), 1.4 + 0.05 * std::sin(2 * t)),
-                       0.25 * std::sin(0.9 * t));
-}
+// The camera follows testing::HandHeldPathPose by frame index: its motion per frame stays
+// the same whatever the frames' stamps.
 
 enum class BoxDepth {
   kFull,   // depth on the whole box
@@ -75,7 +70,7 @@ std::vector<RenderedFrame> Render(const std::vector<ScriptedFrame>& script) {
     const double y = script[i].box_y_m;
     const auto box = BoxQuads({1.0, y, 0.4}, {1.4, y + 0.6, 1.6}, 23, kBoxId);
     quads.insert(quads.end(), box.begin(), box.end());
-    RenderedFrame rendered = RenderQuads(quads, camera, PathPose(static_cast<int>(i)), static_cast<int>(i),
+    RenderedFrame rendered = RenderQuads(quads, camera, HandHeldPathPose(static_cast<int>(i)), static_cast<int>(i),
                                          script[i].stamp_s);
     DropBoxDepth(script[i].box_depth, &rendered);
     frames.push_back(std::move(rendered));
@@ -85,7 +80,7 @@ std::vector<RenderedFrame> Render(const std::vector<ScriptedFrame>& script) {
 
 // The box is the only instance, of a moveable class; the tracker starts at the true pose.
 std::vector<FrameResult> TrackMutual(const std::vector<RenderedFrame>& frames, TrackerOptions options) {
-  options.initial_T_wc = PathPose(0);
+  options.initial_T_wc = HandHeldPathPose(0);
   Tracker tracker(TestCamera(), options);
   FrameInstances instances;
   instances.moveable_ids = {kBoxId};

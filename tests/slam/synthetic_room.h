@@ -150,4 +150,12 @@ inline Eigen::Isometry3d LookingAlongX(const Eigen::Vector3d& position, double y
   return T;
 }
 
+// A smooth hand-held-like path at 30 frames a second: forward and sideways drift and a
+// slow yaw oscillation, in the room of RoomQuads().
+inline Eigen::Isometry3d HandHeldPathPose(int frame) {
+  const double t = frame / 30.0;
+  return LookingAlongX(Eigen::Vector3d(-2.0 + 0.25 * t, 0.3 * std::sin(1.3 * t), 1.4 + 0.05 * std::sin(2 * t)),
+                       0.25 * std::sin(0.9 * t));
+}
+
 }  // namespace segslam::slam::testing

@@ -19,18 +19,11 @@ namespace segslam::slam {
 namespace {
 
 using testing::BoxQuads;
-using testing::LookingAlongX;
+using testing::HandHeldPathPose;
 using testing::RenderQuads;
 using testing::RoomQuads;
 
 PinholeCamera TestCamera() { return PinholeCamera::FromVerticalFov(640, 480, 50); }
-
-// A smooth hand-held-like path: forward/sideways drift and a slow yaw oscillation.
-Eigen::Isometry3d PathPose(int i) {
-  const double t = i / 30.0;
-  return LookingAlongX(Eigen::Vector3d(-2.0 + 0.25 * t, 0.3 * std::sin(1.3 * t), 1.4 + 0.05 * std::sin(2 * t)),
-                       0.25 * std::sin(0.9 * t));
-}
 
 double PositionError(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
   return (a.translation() - b.translation()).norm();
@@ -49,9 +42,9 @@ TrackerOptions StartingAt(const Eigen::Isometry3d& T_wc) {
 // The long-term map of a first visit: 30 frames along PathPose through `quads`, plain.
 LongTermMapData MapOfFirstVisit(const PinholeCamera& camera, const std::vector<testing::TexturedQuad>& quads,
                                 bool include_instances) {
-  Tracker mapper(camera, StartingAt(PathPose(0)));
+  Tracker mapper(camera, StartingAt(HandHeldPathPose(0)));
   for (int i = 0; i < 30; ++i) {
-    mapper.Track(RenderQuads(quads, camera, PathPose(i), i, i / 30.0).frame, nullptr, SlamMode::kPlain);
+    mapper.Track(RenderQuads(quads, camera, HandHeldPathPose(i), i, i / 30.0).frame, nullptr, SlamMode::kPlain);
   }
   return mapper.ExportLongTermMap(include_instances);
 }
@@ -59,15 +52,15 @@ LongTermMapData MapOfFirstVisit(const PinholeCamera& camera, const std::vector<t
 TEST(TrackerTest, FollowsAKnownPathInATexturedRoom) {
   const PinholeCamera camera = TestCamera();
   const auto room = RoomQuads(1);
-  Tracker tracker(camera, StartingAt(PathPose(0)));
+  Tracker tracker(camera, StartingAt(HandHeldPathPose(0)));
   double worst_m = 0, worst_deg = 0;
   int keyframes = 0;
   for (int i = 0; i < 45; ++i) {
-    const auto rendered = RenderQuads(room, camera, PathPose(i), i, i / 30.0);
+    const auto rendered = RenderQuads(room, camera, HandHeldPathPose(i), i, i / 30.0);
     const FrameResult result = tracker.Track(rendered.frame, nullptr, SlamMode::kPlain);
     ASSERT_TRUE(result.localized()) << "frame " << i;
-    worst_m = std::max(worst_m, PositionError(result.T_wc, PathPose(i)));
-    worst_deg = std::max(worst_deg, AngleErrorDeg(result.T_wc, PathPose(i)));
+    worst_m = std::max(worst_m, PositionError(result.T_wc, HandHeldPathPose(i)));
+    worst_deg = std::max(worst_deg, AngleErrorDeg(result.T_wc, HandHeldPathPose(i)));
     keyframes += result.keyframe;
     EXPECT_GT(result.num_features, 500);
   }
@@ -96,7 +89,7 @@ TEST(TrackerTest, FramesWithoutDepthCannotStartAMap) {
   const auto room = RoomQuads(2);
   Tracker tracker(camera);
   for (int i = 0; i < 3; ++i) {
-    auto rendered = RenderQuads(room, camera, PathPose(i), i, i / 30.0);
+    auto rendered = RenderQuads(room, camera, HandHeldPathPose(i), i, i / 30.0);
     rendered.frame.depth_m.setTo(0);
     const FrameResult result = tracker.Track(rendered.frame, nullptr, SlamMode::kPlain);
     EXPECT_EQ(result.status, TrackingStatus::kLost);
@@ -122,9 +115,9 @@ TEST(TrackerTest, WrongImageTypesAreErrors) {
 TEST(TrackerTest, RelocalizesAfterLosingTrack) {
   const PinholeCamera camera = TestCamera();
   const auto room = RoomQuads(3);
-  Tracker tracker(camera, StartingAt(PathPose(0)));
+  Tracker tracker(camera, StartingAt(HandHeldPathPose(0)));
   for (int i = 0; i < 20; ++i) {
-    ASSERT_TRUE(tracker.Track(RenderQuads(room, camera, PathPose(i), i, i / 30.0).frame, nullptr, SlamMode::kPlain)
+    ASSERT_TRUE(tracker.Track(RenderQuads(room, camera, HandHeldPathPose(i), i, i / 30.0).frame, nullptr, SlamMode::kPlain)
                     .localized());
   }
   // The camera is covered for a few frames, then shows up again elsewhere on the path.
@@ -136,12 +129,12 @@ TEST(TrackerTest, RelocalizesAfterLosingTrack) {
     covered.stamp_s = i / 30.0;
     EXPECT_EQ(tracker.Track(covered, nullptr, SlamMode::kPlain).status, TrackingStatus::kLost);
   }
-  const FrameResult back = tracker.Track(RenderQuads(room, camera, PathPose(10), 23, 23 / 30.0).frame, nullptr,
+  const FrameResult back = tracker.Track(RenderQuads(room, camera, HandHeldPathPose(10), 23, 23 / 30.0).frame, nullptr,
                                          SlamMode::kPlain);
   EXPECT_EQ(back.status, TrackingStatus::kRelocalized);
-  EXPECT_LT(PositionError(back.T_wc, PathPose(10)), 0.01);
-  EXPECT_LT(AngleErrorDeg(back.T_wc, PathPose(10)), 0.3);
-  const FrameResult next = tracker.Track(RenderQuads(room, camera, PathPose(11), 24, 24 / 30.0).frame, nullptr,
+  EXPECT_LT(PositionError(back.T_wc, HandHeldPathPose(10)), 0.01);
+  EXPECT_LT(AngleErrorDeg(back.T_wc, HandHeldPathPose(10)), 0.3);
+  const FrameResult next = tracker.Track(RenderQuads(room, camera, HandHeldPathPose(11), 24, 24 / 30.0).frame, nullptr,
                                          SlamMode::kPlain);
   EXPECT_EQ(next.status, TrackingStatus::kTracking);
 }
@@ -162,9 +155,9 @@ TEST(TrackerTest, YoungMapLostForGoodIsDroppedAndBegunAnew) {
   const PinholeCamera camera = TestCamera();
   const auto room = RoomQuads(6);
   const auto with_crate = WithCrateInFront(room, 0);
-  TrackerOptions never = StartingAt(PathPose(0));
+  TrackerOptions never = StartingAt(HandHeldPathPose(0));
   never.reset_map_keyframes = 0;
-  Tracker tracker(camera, StartingAt(PathPose(0)));
+  Tracker tracker(camera, StartingAt(HandHeldPathPose(0)));
   Tracker never_resets(camera, never);
   ASSERT_EQ(tracker.options().reset_map_after_lost_s, 1.0);
   constexpr int kCrateFrames = 3, kFrames = 45;
@@ -173,7 +166,7 @@ TEST(TrackerTest, YoungMapLostForGoodIsDroppedAndBegunAnew) {
   int new_first = -1;
   double worst_m = 0;
   for (int i = 0; i < kFrames; ++i) {
-    const auto rendered = RenderQuads(i < kCrateFrames ? with_crate : room, camera, PathPose(i), i, i / 30.0);
+    const auto rendered = RenderQuads(i < kCrateFrames ? with_crate : room, camera, HandHeldPathPose(i), i, i / 30.0);
     const FrameResult result = tracker.Track(rendered.frame, nullptr, SlamMode::kPlain);
     const FrameResult kept = never_resets.Track(rendered.frame, nullptr, SlamMode::kPlain);
     EXPECT_FALSE(kept.map_reset);
@@ -194,7 +187,7 @@ TEST(TrackerTest, YoungMapLostForGoodIsDroppedAndBegunAnew) {
       new_first = i;
     }
     const Eigen::Isometry3d estimated = new_first_T_wc->inverse() * result.T_wc;
-    const Eigen::Isometry3d truth = PathPose(new_first).inverse() * PathPose(i);
+    const Eigen::Isometry3d truth = HandHeldPathPose(new_first).inverse() * HandHeldPathPose(i);
     worst_m = std::max(worst_m, PositionError(estimated, truth));
   }
   // Lost from frame 3 (0.1 s): dropped on the first frame 1 s later, begun again on the next.
@@ -215,10 +208,10 @@ TEST(TrackerTest, MutualBeginsNoMapOnAViewOfUnjudgedMoveableObjects) {
   const auto with_crate = WithCrateInFront(room, 1);
   FrameInstances instances;
   instances.moveable_ids = {1};
-  Tracker mutual(camera, StartingAt(PathPose(0)));
-  Tracker plain(camera, StartingAt(PathPose(0)));
+  Tracker mutual(camera, StartingAt(HandHeldPathPose(0)));
+  Tracker plain(camera, StartingAt(HandHeldPathPose(0)));
   for (int i = 0; i < 5; ++i) {
-    const auto rendered = RenderQuads(i < 2 ? with_crate : room, camera, PathPose(i), i, i / 30.0);
+    const auto rendered = RenderQuads(i < 2 ? with_crate : room, camera, HandHeldPathPose(i), i, i / 30.0);
     instances.ids = rendered.instance_ids;
     const FrameResult result = mutual.Track(rendered.frame, &instances, SlamMode::kMutual);
     if (i < 2) {
@@ -243,9 +236,9 @@ TEST(TrackerTest, MaskMoveableBeginsNoMapWhenEveryFeatureIsOnAMoveableObject) {
   const auto with_crate = WithCrateInFront(room, 1);
   FrameInstances instances;
   instances.moveable_ids = {1};
-  Tracker tracker(camera, StartingAt(PathPose(0)));
+  Tracker tracker(camera, StartingAt(HandHeldPathPose(0)));
   for (int i = 0; i < 4; ++i) {
-    const auto rendered = RenderQuads(i < 2 ? with_crate : room, camera, PathPose(i), i, i / 30.0);
+    const auto rendered = RenderQuads(i < 2 ? with_crate : room, camera, HandHeldPathPose(i), i, i / 30.0);
     instances.ids = rendered.instance_ids;
     const FrameResult result = tracker.Track(rendered.frame, &instances, SlamMode::kMaskMoveable);
     if (i < 2) {
@@ -292,7 +285,7 @@ TEST(TrackerTest, LocalizesOnALoadedLongTermMapWithoutChangingIt) {
   Tracker localizer(camera);
   localizer.LoadLongTermMap(map, "test map");
   for (int i = 0; i < 20; ++i) {
-    const Eigen::Isometry3d truth = offset * PathPose(i);
+    const Eigen::Isometry3d truth = offset * HandHeldPathPose(i);
     const FrameResult result =
         localizer.Track(RenderQuads(room, camera, truth, i, i / 30.0).frame, nullptr, SlamMode::kPlain);
     ASSERT_TRUE(result.localized()) << "frame " << i;
@@ -327,7 +320,7 @@ TEST(TrackerTest, LocalizationCullsItsNewPoints) {
   localizer.LoadLongTermMap(map, "test map");
   int keyframes = 0;
   for (int i = 0; i < 45; ++i) {
-    const Eigen::Isometry3d truth = Eigen::Translation3d(0, 0.1, 0) * PathPose(44 - i);
+    const Eigen::Isometry3d truth = Eigen::Translation3d(0, 0.1, 0) * HandHeldPathPose(44 - i);
     const FrameResult result =
         localizer.Track(RenderQuads(room, camera, truth, i, i / 30.0).frame, nullptr, SlamMode::kPlain);
     ASSERT_TRUE(result.localized()) << "frame " << i;
@@ -361,7 +354,7 @@ TEST(TrackerTest, MutualJudgesAMovingBoxMovingAndAStillBoxStatic) {
   const auto still_box = BoxQuads({1.0, -1.6, 0.0}, {1.8, -0.8, 1.0}, 77, 2);
   FrameInstances instances;
   instances.moveable_ids = {1, 2};
-  Tracker tracker(camera, StartingAt(PathPose(0)));
+  Tracker tracker(camera, StartingAt(HandHeldPathPose(0)));
   int moving_judgements = 0, static_judgements = 0, judged_frames_moving = 0, judged_frames_still = 0;
   double worst_m = 0, sum_squared_m2 = 0;
   for (int i = 0; i < 40; ++i) {
@@ -371,12 +364,12 @@ TEST(TrackerTest, MutualJudgesAMovingBoxMovingAndAStillBoxStatic) {
     const auto moving_box = BoxQuads({1.2, y, 0.0}, {1.8, y + 0.6, 1.6}, 99, 1);
     quads.insert(quads.end(), moving_box.begin(), moving_box.end());
     quads.insert(quads.end(), still_box.begin(), still_box.end());
-    const auto rendered = RenderQuads(quads, camera, PathPose(i), i, i / 30.0);
+    const auto rendered = RenderQuads(quads, camera, HandHeldPathPose(i), i, i / 30.0);
     instances.ids = rendered.instance_ids;
     const FrameResult result = tracker.Track(rendered.frame, &instances, SlamMode::kMutual);
     ASSERT_TRUE(result.localized()) << "frame " << i;
-    worst_m = std::max(worst_m, PositionError(result.T_wc, PathPose(i)));
-    sum_squared_m2 += std::pow(PositionError(result.T_wc, PathPose(i)), 2);
+    worst_m = std::max(worst_m, PositionError(result.T_wc, HandHeldPathPose(i)));
+    sum_squared_m2 += std::pow(PositionError(result.T_wc, HandHeldPathPose(i)), 2);
     for (const InstanceJudgement& judgement : result.instances) {
       if (!judgement.judged) continue;
       if (judgement.id == 1) {
@@ -439,7 +432,7 @@ TEST(TrackerTest, ObjectAddedSinceTheMapWasMadeIsJudgedStaticWhereItHidesMappedW
   localizer.LoadLongTermMap(map, "first visit");
   int judged = 0, judged_moving = 0;
   for (int i = 0; i < 30; ++i) {
-    const Eigen::Isometry3d truth = Eigen::Translation3d(0, 0.1, 0) * PathPose(i);
+    const Eigen::Isometry3d truth = Eigen::Translation3d(0, 0.1, 0) * HandHeldPathPose(i);
     const auto rendered = RenderQuads(quads, camera, truth, i, i / 30.0);
     instances.ids = rendered.instance_ids;
     const FrameResult result = localizer.Track(rendered.frame, &instances, SlamMode::kMutual);
@@ -469,7 +462,7 @@ TEST(TrackerTest, ObjectFillingTheViewThatStartsToMoveIsJudgedMovingAndLeftOutOf
   const auto room = RoomQuads(5);
   FrameInstances instances;
   instances.moveable_ids = {1};
-  Tracker tracker(camera, StartingAt(PathPose(0)));
+  Tracker tracker(camera, StartingAt(HandHeldPathPose(0)));
   constexpr int kStill = 30, kFrames = 60;
   int judged_while_moving = 0, moving_while_moving = 0;
   double worst_m = 0;
@@ -480,7 +473,7 @@ TEST(TrackerTest, ObjectFillingTheViewThatStartsToMoveIsJudgedMovingAndLeftOutOf
     auto quads = room;
     const auto big_box = BoxQuads({0.5, -0.8 + y, 0.5}, {0.8, 0.8 + y, 2.3}, 41, 1, 512);
     quads.insert(quads.end(), big_box.begin(), big_box.end());
-    const auto rendered = RenderQuads(quads, camera, PathPose(i), i, i / 30.0);
+    const auto rendered = RenderQuads(quads, camera, HandHeldPathPose(i), i, i / 30.0);
     instances.ids = rendered.instance_ids;
     const FrameResult result = tracker.Track(rendered.frame, &instances, SlamMode::kMutual);
     ASSERT_TRUE(result.localized()) << "frame " << i;
@@ -488,7 +481,7 @@ TEST(TrackerTest, ObjectFillingTheViewThatStartsToMoveIsJudgedMovingAndLeftOutOf
     // from its map points, and is rightly taken for still; from a motion baseline (9
     // frames) on, it must be measured moving and kept out of the pose.
     if (i < kStill + 9) continue;
-    worst_m = std::max(worst_m, PositionError(result.T_wc, PathPose(i)));
+    worst_m = std::max(worst_m, PositionError(result.T_wc, HandHeldPathPose(i)));
     for (const InstanceJudgement& judgement : result.instances) {
       if (judgement.id != 1 || !judgement.judged) continue;
       ++judged_while_moving;
@@ -506,7 +499,7 @@ TEST(TrackerTest, FixedClassInstanceNeedsMorePointsToBeJudgedMoving) {
   // Per frame of the box: (judged moving, measured points).
   auto judge_box = [&](int min_points_to_move_fixed_class) {
     FrameInstances instances;  // no moveable ids: every instance is of a fixed class
-    TrackerOptions options = StartingAt(PathPose(0));
+    TrackerOptions options = StartingAt(HandHeldPathPose(0));
     options.min_points_to_move_fixed_class = min_points_to_move_fixed_class;
     Tracker tracker(camera, options);
     std::vector<std::pair<bool, int>> judgements;
@@ -515,7 +508,7 @@ TEST(TrackerTest, FixedClassInstanceNeedsMorePointsToBeJudgedMoving) {
       auto quads = room;
       const auto moving_box = BoxQuads({1.2, y, 0.0}, {1.8, y + 0.6, 1.6}, 99, 1);
       quads.insert(quads.end(), moving_box.begin(), moving_box.end());
-      const auto rendered = RenderQuads(quads, camera, PathPose(i), i, i / 30.0);
+      const auto rendered = RenderQuads(quads, camera, HandHeldPathPose(i), i, i / 30.0);
       instances.ids = rendered.instance_ids;
       const FrameResult result = tracker.Track(rendered.frame, &instances, SlamMode::kMutual);
       for (const InstanceJudgement& judgement : result.instances) {
