@@ -957,9 +957,7 @@ class CityBuilder {
       path.start_offset_m += before_m;
       for (Halt& h : path.halts) h.at_m += before_m;
     }
-    double length_m = 0;
-    for (std::size_t i = 1; i < path.waypoints.size(); ++i) length_m += (path.waypoints[i] - path.waypoints[i - 1]).norm();
-    const double after_m = PathDistanceAt(path, last_s) + kSlackM - length_m;
+    const double after_m = PathDistanceAt(path, last_s) + kSlackM - PathLength(path);
     if (after_m > 0) {
       const std::size_t n = path.waypoints.size();
       std::vector<Eigen::Vector3d> pts = extension_points(path.waypoints[n - 1], path.waypoints[n - 2], after_m);

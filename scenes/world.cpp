@@ -177,6 +177,11 @@ double DistanceWithHalts(double start_m, double speed_mps, const std::vector<Hal
   return start_m + v * (t - delay_s);
 }
 
+double PathLength(const PathMotion& path) {
+  if (path.waypoints.empty()) return 0.0;
+  return Polyline(path.waypoints, path.closed).length;
+}
+
 double PathDistanceAt(const PathMotion& path, double t) {
   return DistanceWithHalts(path.start_offset_m, path.speed_mps, path.halts, path.accel_mps2, t);
 }

@@ -103,6 +103,10 @@ struct PathMotion {
 // Distance the mover has travelled along `path` at time t (start offset included).
 double PathDistanceAt(const PathMotion& path, double t);
 
+// Arc length of `path`'s waypoints (closed: with the segment back to the first); an open
+// path's mover stands still at its ends outside [0, PathLength].
+double PathLength(const PathMotion& path);
+
 // Where an object is in one pass. Exactly one of: absent, static at T_world_object,
 // or moving along `path` (then T_world_object is ignored).
 struct Placement {

@@ -672,12 +672,6 @@ TEST(CityTest, VehiclesNeverTouchEachOther) {
   }
 }
 
-double PathLength(const PathMotion& path) {
-  double length = 0;
-  for (std::size_t i = 1; i < path.waypoints.size(); ++i) length += (path.waypoints[i] - path.waypoints[i - 1]).norm();
-  return length;
-}
-
 // A mover timed to meet the camera late (or early) must not stand at its path's start
 // (or end) meanwhile: movers in a heap there touched each other and were left out (12 of
 // rush hour's), and stood still where the camera could see them.
