@@ -250,6 +250,7 @@ std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& ins
     throw Error("frame " + std::to_string(s.current.index) + ": instance ids must be CV_16U of the camera's size");
   }
   const std::map<std::uint16_t, std::vector<int>> features_of = s.LabelFeatures(instances.ids);
+  s.ForgetSnapshotsBefore(s.current.stamp_s);
   // Motion is measured against the background's pose where it can be had. The coarse
   // pose comes from every feature, and instances that fill the view pull it along: then
   // their own points agree with it whether they move or not (three walkers in front of
@@ -363,10 +364,8 @@ FrameResult Tracker::UpdateMaps() {
     s.velocity = s.have_last && !s.last_lost() ? std::optional<Eigen::Isometry3d>(s.current.T_cw * s.last.T_cw.inverse())
                                                 : std::nullopt;
     s.history.push_back(s.Snapshot());
-    // Keep the newest snapshot at least one baseline old, and everything younger.
-    while (s.history.size() > 1 && s.current.stamp_s - s.history[1].stamp_s >= options_.motion_baseline_s - 1e-6) {
-      s.history.pop_front();
-    }
+    // What the next frame needs is kept: it is later than this one.
+    s.ForgetSnapshotsBefore(s.current.stamp_s);
   } else {
     s.velocity.reset();
     s.history.clear();

@@ -123,17 +123,17 @@ int CountMoving(const std::vector<InstanceJudgement>& judgements, int first, int
 // --- Streaks: frames far enough apart that each has a full motion baseline behind it.
 
 // Longer than motion_baseline_s (0.3 s): every frame measures the box against where it
-// stood at least a baseline back (the frame before or the one before that), and no map
-// point is ever too young to judge. Three such intervals fit in moving_memory_s (1 s).
+// stood in the frame before, a full baseline back, and no map point is ever too young to
+// judge. Three such intervals fit in moving_memory_s (1 s).
 constexpr double kFrameIntervalS = 0.32;
 constexpr int kStillFrames = 6;
 // A move per frame far above the moving threshold (0.11 m at 3 m).
 constexpr double kStepM = 0.25;
 
-// The box stands for kStillFrames frames, moves kStepM in each of the next `moves`
+// The box stands for kStillFrames frames, moves kStepM in each of the next `moves` + 1
 // frames and stands again. The frame of the first move is not judged moving yet (its few
 // measured features do not agree on a displacement), and the frame after the last move
-// still is (it compares with the frame two back): `moves` moving verdicts, on frames
+// measures it still against the frame before: `moves` moving verdicts, on frames
 // kStillFrames + 1 .. LastMovingFrame(moves); the tests check that count. `pause_s` is
 // the time between the second and third moving verdicts (a frame interval unless
 // longer), `depth_after` the box's depth in the frames after the last one.
@@ -146,7 +146,7 @@ std::vector<ScriptedFrame> MoveAndStop(int moves, const std::vector<BoxDepth>& d
   const int frames = last_moving + 1 + static_cast<int>(depth_after.size());
   double y = -0.9;
   for (int i = 0; i < frames; ++i) {
-    if (i >= kStillFrames && i < kStillFrames + moves) y += kStepM;
+    if (i >= kStillFrames && i <= last_moving) y += kStepM;
     const double pause_extra_s = i >= kStillFrames + 3 ? pause_s - kFrameIntervalS : 0.0;
     const BoxDepth depth = i > last_moving ? depth_after[static_cast<size_t>(i - last_moving - 1)] : BoxDepth::kFull;
     script.push_back({i * kFrameIntervalS + pause_extra_s, y, depth});
@@ -179,24 +179,31 @@ TEST(InstanceJudgementTest, OnlyAFullStreakOfMovingFramesKeepsAnObjectMovingAfte
 
 // A box kept moving by its streak is released by the first frame that measures it still
 // on at least min_points_to_clear_moving features, and that ends the streak: a later
-// frame with fewer measured features no longer keeps it moving.
+// frame with fewer measured features no longer keeps it moving. A frame measures the box
+// against the one before: with depth on the whole box again after a frame with depth on
+// the patch only, it still finds the patch's features alone.
 TEST(InstanceJudgementTest, ObjectKeptMovingIsClearedOnlyByEnoughMeasuredFeatures) {
   TrackerOptions options;
   const int moves = options.moving_streak_frames;
   const int stopped = LastMovingFrame(moves) + 1;
-  const auto frames = Render(MoveAndStop(moves, {BoxDepth::kPatch, BoxDepth::kFull, BoxDepth::kPatch}));
+  const auto frames =
+      Render(MoveAndStop(moves, {BoxDepth::kPatch, BoxDepth::kFull, BoxDepth::kFull, BoxDepth::kPatch}));
   const auto judgements = JudgeBox(frames, options);
   auto at = [&](int frame) { return judgements[static_cast<size_t>(frame)]; };
   ASSERT_TRUE(at(stopped - 1).moving);
 
-  EXPECT_TRUE(at(stopped).moving) << "kept moving on " << at(stopped).num_points << " still features";
-  EXPECT_TRUE(at(stopped).judged);
-  EXPECT_EQ(at(stopped).num_moving_points, 0);
-  ASSERT_GE(at(stopped + 1).num_points, PointsToClear(options, at(stopped + 1)));
-  EXPECT_FALSE(at(stopped + 1).moving) << "measured still on the whole box";
-  EXPECT_TRUE(at(stopped + 1).judged);
-  EXPECT_FALSE(at(stopped + 2).moving) << "the streak ended when the box was cleared";
+  for (const int kept : {stopped, stopped + 1}) {
+    SCOPED_TRACE(::testing::Message() << "frame " << kept);
+    ASSERT_LT(at(kept).num_points, PointsToClear(options, at(kept)));
+    EXPECT_TRUE(at(kept).moving) << "kept moving on " << at(kept).num_points << " still features";
+    EXPECT_TRUE(at(kept).judged);
+    EXPECT_LT(at(kept).moving_share, options.moving_share_threshold) << "measured still";
+  }
+  ASSERT_GE(at(stopped + 2).num_points, PointsToClear(options, at(stopped + 2)));
+  EXPECT_FALSE(at(stopped + 2).moving) << "measured still on the whole box";
   EXPECT_TRUE(at(stopped + 2).judged);
+  EXPECT_FALSE(at(stopped + 3).moving) << "the streak ended when the box was cleared";
+  EXPECT_TRUE(at(stopped + 3).judged);
 
   // With the option at what the patch shows, the patch alone clears the box (the box
   // has enough features for the option, not the eighth of them, to decide).
