@@ -103,33 +103,24 @@ void Tracker::Impl::ForgetSnapshotsBefore(double stamp_s) {
 // match them to the same instance's features in the oldest remembered frame, the newest
 // a full baseline back where there is one (a longer baseline makes slow walkers
 // measurable), and compare their world positions.
-Tracker::Impl::HistoryMeasurement Tracker::Impl::MotionAgainstHistory(std::uint16_t id,
-                                                                      const std::vector<int>& features,
-                                                                      const Eigen::Isometry3d& T_wc,
-                                                                      InstanceJudgement* judgement,
-                                                                      MotionEvidence* evidence) const {
-  HistoryMeasurement measurement;
+bool Tracker::Impl::MotionAgainstHistory(std::uint16_t id, const std::vector<int>& features,
+                                         const Eigen::Isometry3d& T_wc, InstanceJudgement* judgement,
+                                         MotionEvidence* evidence) const {
   for (const InstanceSnapshot& snapshot : history) {  // oldest first
-    measurement.full_baseline = current.stamp_s - snapshot.stamp_s >= options.motion_baseline_s - 1e-6;
     std::vector<int> rows;
     for (size_t k = 0; k < snapshot.instance.size(); ++k) {
       if (snapshot.instance[k] == id && std::isfinite(snapshot.point_w[k].x())) rows.push_back(static_cast<int>(k));
     }
     if (static_cast<int>(rows.size()) < options.min_points_to_judge) continue;
-    measurement.found_instance = true;
-    cv::Mat past(static_cast<int>(rows.size()), kOrbDescriptorBytes, CV_8U);
-    for (size_t k = 0; k < rows.size(); ++k) snapshot.descriptors.row(rows[k]).copyTo(past.row(static_cast<int>(k)));
     std::vector<int> query_features;
     for (int i : features) {
       if (current.features.depth_m[static_cast<size_t>(i)] > 0 && !OnDepthEdge(static_cast<size_t>(i))) {
         query_features.push_back(i);
       }
     }
-    if (query_features.empty()) {
-      measurement.full_baseline = false;
-      return measurement;
-    }
-    measurement.looked_for_features = true;
+    if (query_features.empty()) return false;
+    cv::Mat past(static_cast<int>(rows.size()), kOrbDescriptorBytes, CV_8U);
+    for (size_t k = 0; k < rows.size(); ++k) snapshot.descriptors.row(rows[k]).copyTo(past.row(static_cast<int>(k)));
     cv::Mat query(static_cast<int>(query_features.size()), kOrbDescriptorBytes, CV_8U);
     for (size_t k = 0; k < query_features.size(); ++k) {
       current.features.descriptors.row(query_features[k]).copyTo(query.row(static_cast<int>(k)));
@@ -149,10 +140,9 @@ Tracker::Impl::HistoryMeasurement Tracker::Impl::MotionAgainstHistory(std::uint1
       evidence->Add(x_w - past_w, threshold);
       if ((x_w - past_w).norm() > threshold) ++judgement->num_moving_points;
     }
-    return measurement;
+    return current.stamp_s - snapshot.stamp_s >= options.motion_baseline_s - 1e-6;
   }
-  measurement.full_baseline = false;
-  return measurement;
+  return false;
 }
 
 // The instance id under each feature (into current.instance), and each instance's
@@ -177,7 +167,6 @@ bool Tracker::Impl::MeasureInstanceMotion(std::uint16_t id, const std::vector<in
                                           const Eigen::Isometry3d& T_wc, bool trust_young_points,
                                           InstanceJudgement* judgement, MotionEvidence* evidence) const {
   std::vector<int> unmatched;
-  std::vector<int> on_other_objects;  // matched to a point of another instance or background
   for (int f : features) {
     const MapPoint* point = MatchedPoint(static_cast<size_t>(f));
     // A point made less than a baseline ago has not seen the object move far enough
@@ -192,10 +181,9 @@ bool Tracker::Impl::MeasureInstanceMotion(std::uint16_t id, const std::vector<in
     // A match to another object's point is an accidental descriptor match, not a
     // measurement of this instance: a parked car, added or relocated since the map
     // was made, matches the façade it now hides, and would be judged moving for as
-    // long as it stays there. Such matches are kept as a last resort (below).
+    // long as it stays there. Its own features measure it instead.
     if (point->instance_id != id) {
       unmatched.push_back(f);
-      on_other_objects.push_back(f);
       continue;
     }
     const int motion = MotionAgainstPoint(static_cast<size_t>(f), point, T_wc, evidence);
@@ -204,32 +192,7 @@ bool Tracker::Impl::MeasureInstanceMotion(std::uint16_t id, const std::vector<in
     judgement->num_moving_points += motion;
   }
   if (judgement->num_points >= options.min_points_to_judge) return true;
-  const HistoryMeasurement history = MotionAgainstHistory(id, unmatched, T_wc, judgement, evidence);
-  bool full_baseline = history.full_baseline;
-  // The last resort: the instance was there a moment ago with enough features, yet
-  // none of its features with depth can be found again and none of its own map points
-  // measures it. A walker does that (limbs and folds change their look within a
-  // baseline); a rigid car seen again is measured by its history. Then the matches to
-  // other objects decide, those of points at least a baseline old. An instance whose
-  // depth is gone was not looked for, and is not judged on accidental matches. What it
-  // buys now that walkers are followed better (segslam eval, ground-truth masks, at
-  // 1090cbf): on the shipped city route's pass 2 moving things are judged moving in 25.8 %
-  // of the frames they are seen in instead of 23.7 %; on walking_xyz and
-  // walking_halfsphere coverage is the same with or without it, and it adds 8 and 15
-  // false "moving" verdicts of pass 1 there (precision 98.0 and 96.8 % instead of 100 %).
-  if (judgement->num_points == 0 && history.found_instance && history.looked_for_features) {
-    for (int f : on_other_objects) {
-      const size_t i = static_cast<size_t>(f);
-      const MapPoint* point = MatchedPoint(i);
-      if (!point->fixed && current.stamp_s - point->first_stamp_s < options.motion_baseline_s - 1e-6) continue;
-      const int motion = MotionAgainstPoint(i, point, T_wc, evidence);
-      if (motion < 0) continue;
-      ++judgement->num_points;
-      judgement->num_moving_points += motion;
-      full_baseline = true;  // the points are at least a baseline old
-    }
-  }
-  return full_baseline;
+  return MotionAgainstHistory(id, unmatched, T_wc, judgement, evidence);
 }
 
 // The verdict on this frame's measurement alone: moving needs enough points, a share of

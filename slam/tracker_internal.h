@@ -289,20 +289,10 @@ struct Tracker::Impl {
   // against the newest one at least motion_baseline_s older than it.
   void ForgetSnapshotsBefore(double stamp_s);
 
-  struct HistoryMeasurement {
-    // A remembered frame held at least min_points_to_judge of the instance's features
-    // with depth: the instance was there to be followed.
-    bool found_instance = false;
-    // This frame had features of the instance with depth to look for there. Without
-    // depth nothing was looked for, so nothing can be said to be lost.
-    bool looked_for_features = false;
-    // That frame was a full baseline back. A "static" verdict needs it: over one frame a
-    // walker moves less than the depth noise.
-    bool full_baseline = false;
-  };
-  HistoryMeasurement MotionAgainstHistory(std::uint16_t id, const std::vector<int>& features,
-                                          const Eigen::Isometry3d& T_wc, InstanceJudgement* judgement,
-                                          MotionEvidence* evidence) const;
+  // Returns whether the remembered frame measured against lies a full baseline back. A
+  // "static" verdict needs it: over one frame a walker moves less than the depth noise.
+  bool MotionAgainstHistory(std::uint16_t id, const std::vector<int>& features, const Eigen::Isometry3d& T_wc,
+                            InstanceJudgement* judgement, MotionEvidence* evidence) const;
 
   // ------------------------------------------- judgement (instance_judgement.cpp)
   // JudgeInstances() in steps: which features lie on which instance; what this frame
