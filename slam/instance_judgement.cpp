@@ -106,19 +106,19 @@ void Tracker::Impl::ForgetSnapshotsBefore(double stamp_s) {
 bool Tracker::Impl::MotionAgainstHistory(std::uint16_t id, const std::vector<int>& features,
                                          const Eigen::Isometry3d& T_wc, InstanceJudgement* judgement,
                                          MotionEvidence* evidence) const {
+  std::vector<int> query_features;
+  for (int i : features) {
+    if (current.features.depth_m[static_cast<size_t>(i)] > 0 && !OnDepthEdge(static_cast<size_t>(i))) {
+      query_features.push_back(i);
+    }
+  }
+  if (query_features.empty()) return false;
   for (const InstanceSnapshot& snapshot : history) {  // oldest first
     std::vector<int> rows;
     for (size_t k = 0; k < snapshot.instance.size(); ++k) {
       if (snapshot.instance[k] == id && std::isfinite(snapshot.point_w[k].x())) rows.push_back(static_cast<int>(k));
     }
     if (static_cast<int>(rows.size()) < options.min_points_to_judge) continue;
-    std::vector<int> query_features;
-    for (int i : features) {
-      if (current.features.depth_m[static_cast<size_t>(i)] > 0 && !OnDepthEdge(static_cast<size_t>(i))) {
-        query_features.push_back(i);
-      }
-    }
-    if (query_features.empty()) return false;
     cv::Mat past(static_cast<int>(rows.size()), kOrbDescriptorBytes, CV_8U);
     for (size_t k = 0; k < rows.size(); ++k) snapshot.descriptors.row(rows[k]).copyTo(past.row(static_cast<int>(k)));
     cv::Mat query(static_cast<int>(query_features.size()), kOrbDescriptorBytes, CV_8U);
