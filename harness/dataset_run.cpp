@@ -113,6 +113,10 @@ void CheckDatasetRunOptions(const DatasetRunOptions& options) {
   if (!options.segmenter.empty() && options.masks != "gt") {
     throw Error("run: --segmenter " + options.segmenter + " and --masks " + options.masks + " exclude each other");
   }
+  if (options.mode == "oracle" && (!options.segmenter.empty() || options.masks != "gt")) {
+    throw Error("run: mode oracle takes the dataset's ground-truth masks and tracks (the verdicts a perfect "
+                "judgement would give): no --segmenter or --masks DIR");
+  }
   if (!options.refiner_options.empty()) {
     if (!RunsMutualLoop(options)) {
       throw Error("run: --refiner applies to the mutual loop: mode mutual with --segmenter or --masks");

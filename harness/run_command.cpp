@@ -169,7 +169,9 @@ void AddRunCommand(CLI::App& app, std::function<int()>* action) {
   cmd->add_option("dataset", args->dataset, "A TUM-layout sequence, or a dataset with pass1/ and pass2/")
       ->required();
   // Checked by slam::ParseSlamMode, whose error is one line like every other.
-  cmd->add_option("--mode", args->mode, "plain, mask-moveable or mutual");
+  cmd->add_option("--mode", args->mode,
+                  "plain, mask-moveable, mutual, or oracle (mutual with the true moving/static verdicts of a "
+                  "generated dataset, for reference)");
   cmd->add_option("--masks", args->masks,
                   "'gt' (the dataset's masks, used as they are) or a folder of external masks (refined in "
                   "the loop in mutual mode)");

@@ -176,8 +176,8 @@ void ScoreMovingDetection(const std::vector<LoggedFrame>& frames, const fs::path
     for (const TrackSample& sample : track.samples) truly_moving[{track.instance_id, sample.frame}] = sample.moving;
   }
   MovingDetectionScores scores;
-  // Only a mutual run lists every instance it saw; the other modes list none.
-  const bool lists_instances = pass->mode == "mutual";
+  // Only a mutual or oracle run lists every instance it saw; the other modes list none.
+  const bool lists_instances = pass->mode == "mutual" || pass->mode == "oracle";
   std::vector<double> moving_feature_shares;
   const auto add_share = [&](const LoggedFrame& frame, int moving_features) {
     if (lists_instances && frame.features > 0) {

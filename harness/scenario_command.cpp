@@ -149,7 +149,8 @@ class RepeatRunner {
     RepeatRun& run = runs_[index];
     DatasetRunOptions options;
     options.mode = run.mode;
-    if (run.mode != "plain" && bench_.segmenter != "gt") options.segmenter = bench_.segmenter;
+    // The oracle's verdicts are the ground truth's, and so are its masks.
+    if (run.mode != "plain" && run.mode != "oracle" && bench_.segmenter != "gt") options.segmenter = bench_.segmenter;
     options.seed = run.seed;
     options.strength = bench_.segmenter_strength;
     if (run.mode == "mutual" && !options.segmenter.empty()) options.refiner_options = bench_.refiner;

@@ -506,10 +506,10 @@ BenchSettings BenchSettings::FromYaml(const YAML::Node& bench, const std::string
 }
 
 std::string BenchSettings::Check() const {
-  if (modes.empty()) return "modes: at least one of plain, mask-moveable, mutual";
+  if (modes.empty()) return "modes: at least one of plain, mask-moveable, mutual, oracle";
   std::set<std::string> seen;
   for (const std::string& mode : modes) {
-    if (!Contains(slam::SlamModeNames(), mode)) return "modes: unknown mode '" + mode + "' (plain, mask-moveable or mutual)";
+    if (!Contains(slam::SlamModeNames(), mode)) return "modes: unknown mode '" + mode + "' (plain, mask-moveable, mutual or oracle)";
     if (!seen.insert(mode).second) return "modes: '" + mode + "' twice";
   }
   if (repeats < 1) return fmt::format("repeats: must be >= 1 (got {})", repeats);
@@ -556,7 +556,9 @@ std::string BenchSettings::SegmenterLabel() const {
   return segmenter == "gt" ? segmenter : SimulatedSegmenterLabel(segmenter, segmenter_strength);
 }
 
-bool BenchSettings::ModeIsDeterministic(const std::string& mode) const { return mode == "plain" || segmenter == "gt"; }
+bool BenchSettings::ModeIsDeterministic(const std::string& mode) const {
+  return mode == "plain" || mode == "oracle" || segmenter == "gt";
+}
 
 MetricName ParseMetricName(const std::string& text, const std::vector<std::string>& modes, const std::string& origin) {
   auto unknown = [&](const std::string& why) {

@@ -2,8 +2,11 @@
 
 #include <algorithm>
 #include <future>
+#include <map>
 #include <memory>
+#include <optional>
 #include <sstream>
+#include <unordered_set>
 
 #include <nlohmann/json.hpp>
 
@@ -13,6 +16,7 @@
 #include "core/image_io.h"
 #include "core/instances.h"
 #include "core/statistics.h"
+#include "core/tracks.h"
 #include "seg/external_masks.h"
 #include "seg/simulated_segmenter.h"
 
@@ -78,7 +82,8 @@ std::unique_ptr<seg::Segmenter> MakeSegmenter(const TumSequence& sequence, const
 }
 
 // The instance masks of each frame as SLAM takes them, unrefined: the dataset's ground
-// truth, or a segmenter's raw output.
+// truth, or a segmenter's raw output. For the oracle, the ground truth's moving
+// instances too.
 class MaskSource {
  public:
   MaskSource(const TumSequence& sequence, const SlamRunOptions& options)
@@ -93,6 +98,18 @@ class MaskSource {
     for (const InstanceInfo& info : table_.instances()) {
       if (info.moveable) moveable_.insert(info.id);
     }
+    if (options.mode == slam::SlamMode::kOracle) {
+      const fs::path tracks = sequence.dir() / "tracks.json";
+      if (!fs::exists(tracks)) {
+        throw FileError(tracks, "missing: mode oracle takes which instances move from the ground-truth tracks");
+      }
+      moving_by_frame_.emplace();
+      for (const ObjectTrack& track : ReadTracks(tracks)) {
+        for (const TrackSample& sample : track.samples) {
+          if (sample.moving) (*moving_by_frame_)[sample.frame].insert(track.instance_id);
+        }
+      }
+    }
   }
 
   slam::FrameInstances Load(const RgbdFrame& frame) {
@@ -105,6 +122,11 @@ class MaskSource {
     instances.ids = sequence_.LoadInstanceMask(path);  // Checks its size.
     CheckMaskIds(instances.ids, table_, path.string());
     instances.moveable_ids = moveable_;
+    if (moving_by_frame_.has_value()) {
+      const auto moving = moving_by_frame_->find(frame.index);
+      instances.known_moving_ids = moving != moving_by_frame_->end() ? moving->second
+                                                                     : std::unordered_set<std::uint16_t>{};
+    }
     return instances;
   }
 
@@ -113,6 +135,8 @@ class MaskSource {
   std::unique_ptr<seg::Segmenter> segmenter_;
   InstanceTable table_;
   std::unordered_set<std::uint16_t> moveable_;
+  // Oracle mode: frame index -> instances that moved since the frame before.
+  std::optional<std::map<int, std::unordered_set<std::uint16_t>>> moving_by_frame_;
 };
 
 
@@ -212,6 +236,10 @@ double SlamRunResult::MedianTrackingMs() const {
 }
 
 SlamRunResult RunSlamOnSequence(const TumSequence& sequence, const SlamRunOptions& options) {
+  if (options.mode == slam::SlamMode::kOracle && (!options.segmenter.empty() || options.masks != "gt")) {
+    throw Error("mode oracle takes the dataset's ground-truth masks, whose ids the ground-truth tracks name: "
+                "no segmenter or external masks");
+  }
   if (options.mode == slam::SlamMode::kMutual && (!options.segmenter.empty() || options.masks != "gt")) {
     return RunMutualLoop(sequence, options);
   }
@@ -235,8 +263,10 @@ SlamRunResult RunSlamOnSequence(const TumSequence& sequence, const SlamRunOption
     if (options.on_frame) options.on_frame(i + 1, total);
   }
   // The plain baseline knows no instances, so its long-term map is everything it mapped;
-  // mask-moveable never mapped a moveable object; mutual keeps the background only.
-  result.long_term_map = tracker.ExportLongTermMap(options.mode != slam::SlamMode::kMutual);
+  // mask-moveable never mapped a moveable object; mutual and the oracle keep the
+  // background only.
+  const bool knows_instances = options.mode == slam::SlamMode::kMutual || options.mode == slam::SlamMode::kOracle;
+  result.long_term_map = tracker.ExportLongTermMap(!knows_instances);
   result.long_term_map.description = "segslam long-term map of " + sequence.dir().string() + ", mode " +
                                      slam::ToString(options.mode);
   result.keyframes = static_cast<int>(tracker.map().keyframes().size());

@@ -33,7 +33,8 @@ namespace segslam::harness {
 struct SlamRunOptions {
   slam::SlamMode mode = slam::SlamMode::kPlain;
   // "gt": <sequence>/masks/<stem>.png with <sequence>/instances.json; otherwise a folder
-  // of external masks (seg/external_masks.h). Unused in plain mode.
+  // of external masks (seg/external_masks.h). Unused in plain mode; the oracle takes
+  // "gt" only, with <sequence>/tracks.json for which instances move.
   std::string masks = "gt";
   // A simulated segmenter preset (seg/simulated_segmenter.h: clean, fcis-like,
   // mask-rcnn-like, poor) instead of `masks` (which must then stay "gt"); empty = none.

@@ -371,7 +371,12 @@ SweepContents ContentsOf(const std::vector<nlohmann::json>& results) {
 ReportTable SweepTable(const SweepGrid& grid, const std::vector<nlohmann::json>& results,
                        const SweepContents& contents) {
   const bool two_pass = contents.two_pass;
-  const bool ratios = contents.has_plain && contents.has_mutual;
+  // Against plain: mutual, and the oracle (what a perfect judgement would give) if it ran.
+  std::vector<std::string> ratio_modes;
+  for (const char* mode : {"mutual", "oracle"}) {
+    const bool ran = std::find(contents.modes.begin(), contents.modes.end(), mode) != contents.modes.end();
+    if (contents.has_plain && ran) ratio_modes.push_back(mode);
+  }
   ReportTable table;
   table.caption = "Median over repeats [min, max]; pass 2 scored in the pass-1 map frame";
   for (const SweepAxis& axis : grid.axes) table.header.push_back(axis.key);
@@ -384,9 +389,9 @@ ReportTable SweepTable(const SweepGrid& grid, const std::vector<nlohmann::json>&
       table.header.push_back(mode + " localized p2");
     }
   }
-  if (ratios) {
-    table.header.push_back("mutual/plain ATE p1");
-    if (two_pass) table.header.push_back("mutual/plain ATE p2");
+  for (const std::string& mode : ratio_modes) {
+    table.header.push_back(mode + "/plain ATE p1");
+    if (two_pass) table.header.push_back(mode + "/plain ATE p2");
   }
   if (contents.has_mutual) {
     // What the density axes mean to SLAM: how much of what it saw moved (run_evaluation.h).
@@ -405,10 +410,10 @@ ReportTable SweepTable(const SweepGrid& grid, const std::vector<nlohmann::json>&
         row.push_back(Cell(100 * ValueOf(r, "pass2", mode, "localized_share").median, "{:.1f}%"));
       }
     }
-    if (ratios) {
+    for (const std::string& mode : ratio_modes) {
       for (const std::string pass : {"pass1", "pass2"}) {
         if (pass == std::string("pass2") && !two_pass) continue;
-        row.push_back(Cell(ValueOf(r, pass, "mutual", "ate_rmse_m").median / ValueOf(r, pass, "plain", "ate_rmse_m").median,
+        row.push_back(Cell(ValueOf(r, pass, mode, "ate_rmse_m").median / ValueOf(r, pass, "plain", "ate_rmse_m").median,
                            "{:.2f}"));
       }
     }

@@ -17,13 +17,21 @@ std::string ToString(SlamMode mode) {
     case SlamMode::kPlain: return "plain";
     case SlamMode::kMaskMoveable: return "mask-moveable";
     case SlamMode::kMutual: return "mutual";
+    case SlamMode::kOracle: return "oracle";
   }
   return "?";
 }
 
 const std::vector<std::string>& SlamModeNames() {
   static const std::vector<std::string> names = {
-      ToString(SlamMode::kPlain), ToString(SlamMode::kMaskMoveable), ToString(SlamMode::kMutual)};
+      ToString(SlamMode::kPlain), ToString(SlamMode::kMaskMoveable), ToString(SlamMode::kMutual),
+      ToString(SlamMode::kOracle)};
+  return names;
+}
+
+const std::vector<std::string>& PaperModeNames() {
+  static const std::vector<std::string> names = {ToString(SlamMode::kPlain), ToString(SlamMode::kMaskMoveable),
+                                                 ToString(SlamMode::kMutual)};
   return names;
 }
 
@@ -31,7 +39,8 @@ SlamMode ParseSlamMode(const std::string& name) {
   if (name == "plain") return SlamMode::kPlain;
   if (name == "mask-moveable") return SlamMode::kMaskMoveable;
   if (name == "mutual") return SlamMode::kMutual;
-  throw Error("unknown SLAM mode '" + name + "' (expected plain, mask-moveable or mutual)");
+  if (name == "oracle") return SlamMode::kOracle;
+  throw Error("unknown SLAM mode '" + name + "' (expected plain, mask-moveable, mutual or oracle)");
 }
 
 std::string ToString(TrackingStatus status) {
@@ -272,8 +281,13 @@ std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& ins
       MotionEvidence evidence;
       const bool full_baseline =
           s.MeasureInstanceMotion(id, features, T_wc, trust_young_points, &judgement, &evidence);
-      s.DecideMotion(full_baseline, evidence, &judgement);
-      s.ApplyMotionMemory(full_baseline, &judgement, &memory);
+      if (instances.known_moving_ids.has_value()) {
+        judgement.judged = true;
+        judgement.moving = instances.known_moving_ids->count(id) > 0;
+      } else {
+        s.DecideMotion(full_baseline, evidence, &judgement);
+        s.ApplyMotionMemory(full_baseline, &judgement, &memory);
+      }
     }
     s.KeepOutOfPoseAndMap(judgement, features);
     judgements.push_back(judgement);
@@ -391,10 +405,13 @@ FrameResult Tracker::Track(const RgbdFrame& frame, const FrameInstances* instanc
   if (mode != SlamMode::kPlain && instances == nullptr) {
     throw Error("frame " + std::to_string(frame.index) + ": mode " + ToString(mode) + " needs instance masks");
   }
+  if (mode == SlamMode::kOracle && !instances->known_moving_ids.has_value()) {
+    throw Error("frame " + std::to_string(frame.index) + ": mode oracle needs the frame's truly moving instances");
+  }
   BeginFrame(frame);
   if (mode == SlamMode::kMaskMoveable) DropMoveableFeatures(*instances);
   EstimateCoarsePose();
-  if (mode == SlamMode::kMutual) JudgeInstances(*instances);
+  if (mode == SlamMode::kMutual || mode == SlamMode::kOracle) JudgeInstances(*instances);
   EstimateFinePose();
   return UpdateMaps();
 }

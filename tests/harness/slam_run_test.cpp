@@ -177,6 +177,48 @@ TEST(SlamRunTest, MutualHoldsThroughTheWalkingXyzOpening) {
   EXPECT_LE(mutual.ate.translation_m.rmse, 0.5 * plain.ate.translation_m.rmse);
 }
 
+// The oracle reads which instances move from tracks.json, so its verdicts are the
+// truth on every judged instance: mutual as it would run if it were never wrong.
+TEST(SlamRunTest, OracleJudgesAsTheGroundTruthTracksSay) {
+  const fs::path dir = kDataDir / "office_seg" / "pass1";
+  RequireDataset(dir);
+  const Scored oracle = RunAndScore(dir, slam::SlamMode::kOracle);
+  EXPECT_EQ(oracle.run.LocalizedShare(), 1.0);
+  EXPECT_LT(oracle.ate.translation_m.rmse, 0.01);
+  const MovingDetection detection = ScoreMovingJudgements(dir, oracle.run);
+  EXPECT_GE(detection.true_positives, 20);
+  EXPECT_EQ(detection.false_positives, 0);
+  EXPECT_EQ(detection.false_negatives, 0);
+}
+
+// The oracle's verdicts name ground-truth ids: other masks, or a sequence without
+// tracks.json, are refused with the reason.
+TEST(SlamRunTest, OracleRefusesMasksWithoutGroundTruthIdentity) {
+  const fs::path dir = kDataDir / "office_seg" / "pass1";
+  RequireDataset(dir);
+  SlamRunOptions options;
+  options.mode = slam::SlamMode::kOracle;
+  options.max_frames = 2;
+  options.segmenter = "fcis-like";
+  EXPECT_THROW(RunSlamOnSequence(TumSequence::Open(dir), options), Error);
+  options.segmenter.clear();
+
+  // The same sequence without its tracks.
+  const fs::path copy = ScratchPath("no_tracks");
+  fs::remove_all(copy);
+  fs::create_directories(copy);
+  for (const fs::directory_entry& entry : fs::directory_iterator(dir)) {
+    if (entry.path().filename() != "tracks.json") fs::create_symlink(entry.path(), copy / entry.path().filename());
+  }
+  try {
+    RunSlamOnSequence(TumSequence::Open(copy), options);
+    ADD_FAILURE() << "a sequence without tracks.json was run as the oracle";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find((copy / "tracks.json").string()), std::string::npos) << e.what();
+  }
+  fs::remove_all(copy);
+}
+
 // The paper's second pass: pass 2 is relocalized on pass 1's long-term map and tracked
 // in its frame without re-alignment; the map file goes through disk on the way.
 TEST(SlamRunTest, SecondPassLocalizesOnTheFirstPassMap) {

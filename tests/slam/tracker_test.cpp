@@ -10,6 +10,7 @@
 #include <functional>
 #include <optional>
 #include <tuple>
+#include <unordered_set>
 #include <vector>
 
 #include "core/error.h"
@@ -403,6 +404,51 @@ TEST(TrackerTest, MutualJudgesAMovingBoxMovingAndAStillBoxStatic) {
                         stored.position_w.y() > -1.61 && stored.position_w.y() < -0.79 && stored.position_w.z() < 1.01;
     EXPECT_FALSE(inside) << stored.position_w.transpose();
   }
+}
+
+// The oracle takes the verdicts it is given, whatever the motion measures: told that
+// the still box moves and the sliding one stands, it keeps the still box out of the pose
+// and map and maps the sliding one. Without verdicts it refuses the frame.
+TEST(TrackerTest, OracleTakesTheGivenVerdictsOverWhatItMeasures) {
+  const PinholeCamera camera = TestCamera();
+  const auto room = RoomQuads(5);
+  const auto still_box = BoxQuads({1.0, -1.6, 0.0}, {1.8, -0.8, 1.0}, 77, 2);
+  FrameInstances instances;
+  instances.moveable_ids = {1, 2};
+  Tracker tracker(camera, StartingAt(HandHeldPathPose(0)));
+  int judged_frames = 0;
+  for (int i = 0; i < 20; ++i) {
+    const double y = -0.2 + 1.5 * i / 30.0 - 0.6;
+    auto quads = room;
+    const auto sliding_box = BoxQuads({1.2, y, 0.0}, {1.8, y + 0.6, 1.6}, 99, 1);
+    quads.insert(quads.end(), sliding_box.begin(), sliding_box.end());
+    quads.insert(quads.end(), still_box.begin(), still_box.end());
+    const auto rendered = RenderQuads(quads, camera, HandHeldPathPose(i), i, i / 30.0);
+    instances.ids = rendered.instance_ids;
+    instances.known_moving_ids.reset();
+    if (i == 1) EXPECT_THROW(tracker.Track(rendered.frame, &instances, SlamMode::kOracle), Error);
+    instances.known_moving_ids = std::unordered_set<std::uint16_t>{2};
+    const FrameResult result = tracker.Track(rendered.frame, &instances, SlamMode::kOracle);
+    if (!result.localized()) continue;
+    bool judged_both = true;
+    for (std::uint16_t id : {1, 2}) {
+      const auto judgement = std::find_if(result.instances.begin(), result.instances.end(),
+                                          [&](const InstanceJudgement& j) { return j.id == id; });
+      judged_both = judged_both && judgement != result.instances.end() && judgement->judged;
+      if (judgement != result.instances.end() && judgement->judged) {
+        EXPECT_EQ(judgement->moving, id == 2) << "frame " << i << ", instance " << id;
+      }
+    }
+    judged_frames += judged_both;
+  }
+  EXPECT_GE(judged_frames, 15);
+  size_t sliding_points = 0;
+  for (const auto& point : tracker.map().points()) {
+    if (point->bad) continue;
+    EXPECT_NE(point->instance_id, 2) << "a point of the box said to move is in the map";
+    sliding_points += point->instance_id == 1;
+  }
+  EXPECT_GT(sliding_points, 0u) << "the box said to stand was not mapped";
 }
 
 // The second visit of a room (localization on the first visit's long-term map) with a
