@@ -772,10 +772,14 @@ ReportDocument ScenarioReport::ToDocument() const {
                                                          "intersections, or too near to brake for)",
                                                          red_lights_left_out)
                                            : ""));
+  const bool oracle = std::find(bench.modes.begin(), bench.modes.end(), "oracle") != bench.modes.end();
   document.AddMetadata("bench", fmt::format("modes {}, {} repeat(s), segmenter {} with seeds {}..{}; deterministic modes "
-                                            "ran once",
+                                            "ran once{}",
                                             Join(bench.modes, ", "), bench.repeats, bench.SegmenterLabel(), bench.seed,
-                                            bench.seed + static_cast<std::uint64_t>(bench.repeats) - 1));
+                                            bench.seed + static_cast<std::uint64_t>(bench.repeats) - 1,
+                                            oracle ? "; oracle: mutual with the ground truth's masks and moving/static "
+                                                     "verdicts, for reference"
+                                                   : ""));
   if (!bench.refiner.empty()) document.AddMetadata("refiner", "the mutual loop's, with " + Join(bench.refiner, " "));
   if (!bench.tracker.empty()) document.AddMetadata("tracker", "every mode's, with " + Join(bench.tracker, " "));
   document.AddMetadata("result", fmt::format("{} in {:.1f} s", StatusLine(*this), seconds));

@@ -120,6 +120,17 @@ TEST(ScenarioReportTest, BenchSectionIsChecked) {
   EXPECT_THROW(BenchSettings::FromYaml(YAML::Load("{segmenter: magic}"), "s.yaml"), Error);
 }
 
+// The oracle runs only where named, and on ground-truth masks whatever the segmenter.
+TEST(ScenarioReportTest, OracleRunsOnlyWhenNamedAndOnce) {
+  const BenchSettings defaults = BenchSettings::FromYaml(YAML::Load("{segmenter: fcis-like}"), "s.yaml");
+  EXPECT_EQ(defaults.modes, (std::vector<std::string>{"plain", "mask-moveable", "mutual"}));
+  const BenchSettings named =
+      BenchSettings::FromYaml(YAML::Load("{modes: [plain, mutual, oracle], segmenter: fcis-like}"), "s.yaml");
+  EXPECT_EQ(named.modes.back(), "oracle");
+  EXPECT_TRUE(named.ModeIsDeterministic("oracle"));
+  EXPECT_FALSE(named.ModeIsDeterministic("mutual"));
+}
+
 TEST(ScenarioReportTest, SegmenterStrengthScalesOnlyASimulatedSegmenter) {
   const BenchSettings preset = BenchSettings::FromYaml(YAML::Load("{segmenter: fcis-like}"), "s.yaml");
   EXPECT_EQ(preset.segmenter_strength, 1.0);
