@@ -235,7 +235,7 @@ void AddBenchCommand(CLI::App& app, std::function<int()>* action) {
   slam->add_option("sequence", slam_args->sequence,
                    "A TUM-layout sequence (with masks/ for mutual and mask-moveable, unless --masks names a folder)")
       ->required();
-  slam->add_option("--mode", slam_args->mode, "plain, mask-moveable or mutual")
+  slam->add_option("--mode", slam_args->mode, "plain, mask-moveable, mutual or oracle")
       ->check(CLI::IsMember(slam::SlamModeNames()))
       ->capture_default_str();
   slam->add_option("--frames", slam_args->frames, "Only the first N frames (0 = all)")

@@ -221,7 +221,7 @@ const std::string kSmallOffice = (fs::path(SEGSLAM_SOURCE_DIR) / "scenarios" / "
 
 TEST_F(SweepCliTest, ShardsMergedEqualOneRun) {
   const std::string common = kSmallOffice + " --set office.people_walking=0,2 --set office.people_sitting=1 --frames 12 " +
-                             "--repeats 1 --modes plain,mutual --segmenter gt -q --cache " + (dir_ / "cache").string();
+                             "--repeats 1 --modes plain,mutual,oracle --segmenter gt -q --cache " + (dir_ / "cache").string();
   const CommandOutput whole = Run("sweep " + common + " --out " + (dir_ / "whole").string());
   ASSERT_EQ(whole.exit_code, 0) << whole.stderr_text;
   for (const char* file : {"sweep.json", "sweep_results.json", "report.md", "report.html", "figures/sweep_ate_pass1.png",
@@ -233,6 +233,8 @@ TEST_F(SweepCliTest, ShardsMergedEqualOneRun) {
   const std::string table = ReadText(dir_ / "whole" / "report.md");
   EXPECT_NE(table.find("| office.people\\_walking |"), std::string::npos) << table;  // Markdown escapes '_'
   EXPECT_NE(table.find("![ATE, pass 1 against"), std::string::npos) << table;
+  EXPECT_NE(table.find("| mutual/plain ATE p1 | mutual/plain ATE p2 | oracle/plain ATE p1 |"), std::string::npos)
+      << table;
   // Moving features: the sitter gestures, so tracks.json counts it moving at both points
   // (16 % of the features); the two walkers add to that.
   const nlohmann::json results = nlohmann::json::parse(ReadText(dir_ / "whole" / "sweep_results.json"));
@@ -281,7 +283,7 @@ TEST_F(SweepCliTest, ShardsMergedEqualOneRun) {
   // The same grid with other settings is another sweep: its points are not the ones kept
   // there, and shards of the two do not merge.
   const std::string longer = kSmallOffice + " --set office.people_walking=0,2 --set office.people_sitting=1 --frames 14 " +
-                             "--repeats 1 --modes plain,mutual --segmenter gt -q --cache " + (dir_ / "cache").string();
+                             "--repeats 1 --modes plain,mutual,oracle --segmenter gt -q --cache " + (dir_ / "cache").string();
   const CommandOutput other = Run("sweep " + longer + " --out " + (dir_ / "whole").string());
   EXPECT_EQ(other.exit_code, 1);
   EXPECT_NE(other.stderr_text.find("holds another sweep"), std::string::npos) << other.stderr_text;
