@@ -21,6 +21,7 @@ namespace {
 
 using testing::BoxQuads;
 using testing::HandHeldPathPose;
+using testing::RenderedFrame;
 using testing::RenderQuads;
 using testing::RoomQuads;
 
@@ -347,25 +348,31 @@ TEST(TrackerTest, MapFromAnotherCameraIsRefused) {
   EXPECT_THROW(tracker.LoadLongTermMap(map, "other.segslam"), Error);
 }
 
+// Frame i of the hand-held path through the room of RoomQuads(5) with two boxes: one
+// (instance 1) sliding across the view at 1.5 m/s, as a walking person, and one
+// (instance 2) that stays put.
+RenderedFrame RenderSlidingAndStillBox(const PinholeCamera& camera, int i) {
+  static const auto room = RoomQuads(5);
+  static const auto still_box = BoxQuads({1.0, -1.6, 0.0}, {1.8, -0.8, 1.0}, 77, 2);
+  const double y = -0.2 + 1.5 * i / 30.0 - 0.6;
+  auto quads = room;
+  const auto sliding_box = BoxQuads({1.2, y, 0.0}, {1.8, y + 0.6, 1.6}, 99, 1);
+  quads.insert(quads.end(), sliding_box.begin(), sliding_box.end());
+  quads.insert(quads.end(), still_box.begin(), still_box.end());
+  return RenderQuads(quads, camera, HandHeldPathPose(i), i, i / 30.0);
+}
+
 // A box slides through the room while the camera moves: mutual judges it moving and
 // keeps its points out of the map; a box that stays put is judged static and mapped.
 TEST(TrackerTest, MutualJudgesAMovingBoxMovingAndAStillBoxStatic) {
   const PinholeCamera camera = TestCamera();
-  const auto room = RoomQuads(5);
-  const auto still_box = BoxQuads({1.0, -1.6, 0.0}, {1.8, -0.8, 1.0}, 77, 2);
   FrameInstances instances;
   instances.moveable_ids = {1, 2};
   Tracker tracker(camera, StartingAt(HandHeldPathPose(0)));
   int moving_judgements = 0, static_judgements = 0, judged_frames_moving = 0, judged_frames_still = 0;
   double worst_m = 0, sum_squared_m2 = 0;
   for (int i = 0; i < 40; ++i) {
-    // 1.5 m/s across the view, as a walking person.
-    const double y = -0.2 + 1.5 * i / 30.0 - 0.6;
-    auto quads = room;
-    const auto moving_box = BoxQuads({1.2, y, 0.0}, {1.8, y + 0.6, 1.6}, 99, 1);
-    quads.insert(quads.end(), moving_box.begin(), moving_box.end());
-    quads.insert(quads.end(), still_box.begin(), still_box.end());
-    const auto rendered = RenderQuads(quads, camera, HandHeldPathPose(i), i, i / 30.0);
+    const auto rendered = RenderSlidingAndStillBox(camera, i);
     instances.ids = rendered.instance_ids;
     const FrameResult result = tracker.Track(rendered.frame, &instances, SlamMode::kMutual);
     ASSERT_TRUE(result.localized()) << "frame " << i;
@@ -411,19 +418,12 @@ TEST(TrackerTest, MutualJudgesAMovingBoxMovingAndAStillBoxStatic) {
 // and map and maps the sliding one. Without verdicts it refuses the frame.
 TEST(TrackerTest, OracleTakesTheGivenVerdictsOverWhatItMeasures) {
   const PinholeCamera camera = TestCamera();
-  const auto room = RoomQuads(5);
-  const auto still_box = BoxQuads({1.0, -1.6, 0.0}, {1.8, -0.8, 1.0}, 77, 2);
   FrameInstances instances;
   instances.moveable_ids = {1, 2};
   Tracker tracker(camera, StartingAt(HandHeldPathPose(0)));
   int judged_frames = 0;
   for (int i = 0; i < 20; ++i) {
-    const double y = -0.2 + 1.5 * i / 30.0 - 0.6;
-    auto quads = room;
-    const auto sliding_box = BoxQuads({1.2, y, 0.0}, {1.8, y + 0.6, 1.6}, 99, 1);
-    quads.insert(quads.end(), sliding_box.begin(), sliding_box.end());
-    quads.insert(quads.end(), still_box.begin(), still_box.end());
-    const auto rendered = RenderQuads(quads, camera, HandHeldPathPose(i), i, i / 30.0);
+    const auto rendered = RenderSlidingAndStillBox(camera, i);
     instances.ids = rendered.instance_ids;
     instances.known_moving_ids.reset();
     if (i == 1) EXPECT_THROW(tracker.Track(rendered.frame, &instances, SlamMode::kOracle), Error);
