@@ -315,7 +315,8 @@ TEST(CityTest, NothingMovesInTheStaticCity) {
 }
 
 TEST(CityTest, CameraIsNeverInsideAGeom) {
-  for (const std::string file : {"test/city_small.yaml", "city_two_pass.yaml", "city_rush_hour.yaml"}) {
+  for (const std::string file :
+       {"test/city_small.yaml", "city_two_pass.yaml", "city_rush_hour.yaml", "city_boulevard.yaml"}) {
     const World w = BuildWorld(LoadScenario(ScenarioPath(file)));
     for (Pass pass : kBothPasses) {
       for (int f = 0; f < w.frames_per_pass[PassIndex(pass)]; f += 3) {
@@ -635,7 +636,7 @@ TEST(CityTest, MovingActorsAreSeenAlongTheRouteAndKeepClear) {
 }
 
 TEST(CityTest, VehiclesNeverTouchEachOther) {
-  for (const std::string file : {"city_two_pass.yaml", "city_rush_hour.yaml"}) {
+  for (const std::string file : {"city_two_pass.yaml", "city_rush_hour.yaml", "city_boulevard.yaml"}) {
     const Scenario s = LoadScenario(ScenarioPath(file));
     const World w = BuildWorld(s);
     std::printf("%s: %d moving actors left out for want of a clear path\n", file.c_str(), w.movers_left_out);
