@@ -145,8 +145,27 @@ bool Tracker::Impl::MotionAgainstHistory(std::uint16_t id, const std::vector<int
   return false;
 }
 
-// The instance id under each feature (into current.instance), and each instance's
-// features.
+std::uint16_t Tracker::Impl::InstanceNear(const cv::Mat& ids, int x, int y) const {
+  // The nearest instance pixel within the margin (the first in row order among equals,
+  // so the answer depends on nothing but the mask).
+  const int margin = options.instance_margin_px;
+  std::uint16_t nearest = 0;
+  int nearest_d2 = margin * margin + 1;
+  for (int v = std::max(0, y - margin); v <= std::min(camera.height - 1, y + margin); ++v) {
+    const std::uint16_t* row = ids.ptr<std::uint16_t>(v);
+    for (int u = std::max(0, x - margin); u <= std::min(camera.width - 1, x + margin); ++u) {
+      const int d2 = (u - x) * (u - x) + (v - y) * (v - y);
+      if (row[u] != 0 && d2 < nearest_d2) {
+        nearest = row[u];
+        nearest_d2 = d2;
+      }
+    }
+  }
+  return nearest;
+}
+
+// The instance under each feature (into current.instance; for background features the
+// nearest one within the margin into current.near_instance), and each instance's features.
 std::map<std::uint16_t, std::vector<int>> Tracker::Impl::LabelFeatures(const cv::Mat& ids) {
   std::map<std::uint16_t, std::vector<int>> features_of;
   for (size_t i = 0; i < current.features.size(); ++i) {
@@ -154,6 +173,7 @@ std::map<std::uint16_t, std::vector<int>> Tracker::Impl::LabelFeatures(const cv:
     const int x = std::clamp(static_cast<int>(std::lround(kp.pt.x)), 0, camera.width - 1);
     const int y = std::clamp(static_cast<int>(std::lround(kp.pt.y)), 0, camera.height - 1);
     const std::uint16_t id = ids.at<std::uint16_t>(y, x);
+    current.near_instance[i] = id == 0 && options.instance_margin_px > 0 ? InstanceNear(ids, x, y) : 0;
     current.instance[i] = id;
     if (id != 0) features_of[id].push_back(static_cast<int>(i));
   }
@@ -255,6 +275,15 @@ void Tracker::Impl::KeepOutOfPoseAndMap(const InstanceJudgement& judgement, cons
   for (int f : features) {
     MapPoint* point = current.points[static_cast<size_t>(f)];
     if (point != nullptr && !point->fixed && point->instance_id == judgement.id) Map::MarkBad(point);
+  }
+}
+
+// Background features on the outline of an instance kept out go with it: a corner there
+// is made by the object against what lies behind it and moves with the object, yet its
+// keypoint often falls just outside the mask.
+void Tracker::Impl::KeepOutNearbyBackground(std::uint16_t id) {
+  for (size_t i = 0; i < current.features.size(); ++i) {
+    if (current.instance[i] == 0 && current.near_instance[i] == id) current.excluded[i] = true;
   }
 }
 

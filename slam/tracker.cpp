@@ -75,6 +75,7 @@ std::vector<FeatureRecord> Tracker::Impl::FeatureRecords() const {
     FeatureRecord record;
     record.pixel = current.features.keypoints[i].pt;
     record.instance_id = current.instance[i];
+    if (current.excluded[i] && record.instance_id == 0) record.instance_id = current.near_instance[i];
     if (current.excluded[i]) {
       const auto judged = moving_of.find(record.instance_id);
       record.kind = judged != moving_of.end() && judged->second ? FeatureKind::kDroppedMoving
@@ -100,6 +101,7 @@ void CheckTrackerOptions(const TrackerOptions& options) {
   require(options.depth_sigma_at_1m > 0 && std::isfinite(options.depth_sigma_at_1m), "depth_sigma_at_1m",
           options.depth_sigma_at_1m, "must be a positive depth noise");
   require(options.max_point_depth_m > 0, "max_point_depth_m", options.max_point_depth_m, "must be positive");
+  require(options.instance_margin_px >= 0, "instance_margin_px", options.instance_margin_px, "must be >= 0");
   require(options.min_initial_map_features >= 1, "min_initial_map_features", options.min_initial_map_features,
           "a map needs at least one point");
   require(options.min_tracking_inliers >= 1, "min_tracking_inliers", options.min_tracking_inliers, "must be >= 1");
@@ -160,6 +162,7 @@ void Tracker::BeginFrame(const RgbdFrame& frame) {
   s.current.outlier.assign(n, false);
   s.current.rejected.assign(n, nullptr);
   s.current.instance.assign(n, 0);
+  s.current.near_instance.assign(n, 0);
   s.current.excluded.assign(n, false);
   s.coarse_ok = s.fine_ok = s.judged = false;
   s.dropped_moveable_records.clear();
@@ -181,6 +184,8 @@ void Tracker::DropMoveableFeatures(const FrameInstances& instances) {
   std::vector<int> rows;
   const FrameFeatures& all = s.current.features;
   for (size_t i = 0; i < all.size(); ++i) {
+    // The mask itself, no margin: a parked car's outline does not move, and around each
+    // of a row of them the margin would leave the baseline little to track.
     const cv::Point pixel(static_cast<int>(std::lround(all.keypoints[i].pt.x)),
                           static_cast<int>(std::lround(all.keypoints[i].pt.y)));
     const std::uint16_t id = instances.ids.at<std::uint16_t>(std::clamp(pixel.y, 0, camera_.height - 1),
@@ -205,6 +210,7 @@ void Tracker::DropMoveableFeatures(const FrameInstances& instances) {
   s.current.outlier.assign(n, false);
   s.current.rejected.assign(n, nullptr);
   s.current.instance.assign(n, 0);
+  s.current.near_instance.assign(n, 0);
   s.current.excluded.assign(n, false);
 }
 
@@ -290,6 +296,7 @@ std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& ins
       }
     }
     s.KeepOutOfPoseAndMap(judgement, features);
+    if (s.current.excluded[static_cast<size_t>(features.front())]) s.KeepOutNearbyBackground(id);
     judgements.push_back(judgement);
   }
   // Every match of a tracked frame counts, inlier of the coarse pose or not: a point made

@@ -171,6 +171,9 @@ struct WorkingFrame {
   std::vector<MapPoint*> rejected;      // outlier matches removed before local-map search
   std::vector<std::uint16_t> instance;  // instance id per feature, 0 = background
   std::vector<bool> excluded;           // moving / unjudged moveable: not for fine pose or map
+  // For a background feature, the instance whose mask lies within
+  // TrackerOptions::instance_margin_px (0 = none): kept out with that instance.
+  std::vector<std::uint16_t> near_instance;
   Eigen::Isometry3d T_cw = Eigen::Isometry3d::Identity();
 };
 
@@ -299,6 +302,8 @@ struct Tracker::Impl {
   // measures of each instance's motion; the verdict on that measurement; what the
   // instance's recent frames add to it; and what a verdict keeps out of the pose and map.
 
+  // The instance nearest to pixel (x, y) within TrackerOptions::instance_margin_px; 0 = none.
+  std::uint16_t InstanceNear(const cv::Mat& ids, int x, int y) const;
   std::map<std::uint16_t, std::vector<int>> LabelFeatures(const cv::Mat& ids);
   bool MeasureInstanceMotion(std::uint16_t id, const std::vector<int>& features,
                              const Eigen::Isometry3d& T_wc, bool trust_young_points,
@@ -306,6 +311,7 @@ struct Tracker::Impl {
   void DecideMotion(bool full_baseline, const MotionEvidence& evidence, InstanceJudgement* judgement) const;
   void ApplyMotionMemory(bool full_baseline, InstanceJudgement* judgement, InstanceMotionMemory* memory) const;
   void KeepOutOfPoseAndMap(const InstanceJudgement& judgement, const std::vector<int>& features);
+  void KeepOutNearbyBackground(std::uint16_t id);
 
   // ------------------------------------------- mapping (local_mapping.cpp)
 

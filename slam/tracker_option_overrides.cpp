@@ -43,6 +43,7 @@ const NamedOptionTable<TrackerOptions>& Table() {
       SEGSLAM_REAL(moving_reprojection_px),
       SEGSLAM_REAL(motion_baseline_s),
       SEGSLAM_INT(min_points_to_judge),
+      SEGSLAM_INT(instance_margin_px),
       SEGSLAM_REAL(moving_share_threshold),
       SEGSLAM_INT(min_points_to_move_fixed_class),
       SEGSLAM_INT(moving_streak_frames),

@@ -13,6 +13,8 @@
 #include <unordered_set>
 #include <vector>
 
+#include <opencv2/imgproc.hpp>
+
 #include "core/error.h"
 #include "tests/slam/synthetic_room.h"
 
@@ -413,6 +415,55 @@ TEST(TrackerTest, MutualJudgesAMovingBoxMovingAndAStillBoxStatic) {
   }
 }
 
+// A background feature within instance_margin_px of the mask of an instance kept out
+// (here the sliding box, not judged in its first frames) is kept out with it and recorded
+// as the box's; one farther out stays in. The box's mask is shrunk by 4 px, so the
+// corners of its outline lie outside it, and each recorded feature is checked against its
+// exact distance to the mask.
+TEST(TrackerTest, BackgroundJustOutsideAKeptOutMaskIsKeptOutWithIt) {
+  const PinholeCamera camera = TestCamera();
+  for (const int margin : {8, 0}) {
+    SCOPED_TRACE(::testing::Message() << "instance_margin_px " << margin);
+    TrackerOptions options = StartingAt(HandHeldPathPose(0));
+    options.record_features = true;
+    options.instance_margin_px = margin;
+    Tracker tracker(camera, options);
+    FrameInstances instances;
+    instances.moveable_ids = {1};
+    int near_outside = 0, far_outside = 0;
+    for (int i = 0; i < 3; ++i) {
+      const RenderedFrame rendered = RenderSlidingAndStillBox(camera, i);
+      const cv::Mat box = rendered.instance_ids == 1;
+      cv::Mat shrunk;
+      cv::erode(box, shrunk, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(9, 9)));
+      instances.ids = cv::Mat(box.size(), CV_16U, cv::Scalar(0));
+      instances.ids.setTo(1, shrunk);
+      cv::Mat distance_px;  // to the nearest pixel of the shrunk mask
+      cv::distanceTransform(shrunk == 0, distance_px, cv::DIST_L2, cv::DIST_MASK_PRECISE);
+      const FrameResult result = tracker.Track(rendered.frame, &instances, SlamMode::kMutual);
+      ASSERT_EQ(result.feature_records.size(), static_cast<size_t>(result.num_features)) << "frame " << i;
+      for (const InstanceJudgement& judgement : result.instances) EXPECT_FALSE(judgement.judged) << "frame " << i;
+      for (const FeatureRecord& record : result.feature_records) {
+        const int x = static_cast<int>(std::lround(record.pixel.x));
+        const int y = static_cast<int>(std::lround(record.pixel.y));
+        const float d = distance_px.at<float>(y, x);
+        const bool kept_out = record.kind == FeatureKind::kDroppedMoveable;
+        if (d <= margin) {
+          near_outside += d > 0;
+          EXPECT_EQ(record.instance_id, 1) << d << " px outside the mask at " << record.pixel;
+          EXPECT_TRUE(kept_out) << d << " px outside the mask at " << record.pixel;
+        } else {
+          far_outside += d <= 8;
+          EXPECT_EQ(record.instance_id, 0) << d << " px outside the mask at " << record.pixel;
+          EXPECT_FALSE(kept_out) << d << " px outside the mask at " << record.pixel;
+        }
+      }
+    }
+    // The box's outline gives corners in the band, so both rules were exercised.
+    EXPECT_GT(margin > 0 ? near_outside : far_outside, 10);
+  }
+}
+
 // The oracle takes the verdicts it is given, whatever the motion measures: told that
 // the still box moves and the sliding one stands, it keeps the still box out of the pose
 // and map and maps the sliding one. Without verdicts it refuses the frame.
@@ -426,7 +477,9 @@ TEST(TrackerTest, OracleTakesTheGivenVerdictsOverWhatItMeasures) {
     const auto rendered = RenderSlidingAndStillBox(camera, i);
     instances.ids = rendered.instance_ids;
     instances.known_moving_ids.reset();
-    if (i == 1) EXPECT_THROW(tracker.Track(rendered.frame, &instances, SlamMode::kOracle), Error);
+    if (i == 1) {
+      EXPECT_THROW(tracker.Track(rendered.frame, &instances, SlamMode::kOracle), Error);
+    }
     instances.known_moving_ids = std::unordered_set<std::uint16_t>{2};
     const FrameResult result = tracker.Track(rendered.frame, &instances, SlamMode::kOracle);
     if (!result.localized()) continue;
