@@ -185,15 +185,15 @@ struct TrackerOptions {
   // least moving_share_threshold of them move: a majority, since a few mismatches on
   // a parked car must not make it a moving one (all points of a moving rigid object move).
   int min_points_to_judge = 4;
+  double moving_share_threshold = 0.5;
   // A background feature within this many pixels of the mask of an instance kept out of
   // the pose and map (moving, or not judged yet) is kept out with it (mutual and oracle;
   // mask-moveable drops what lies on the masks). A corner on a moving object's outline is
   // made by the object against what lies behind it and moves with the object, yet its
   // keypoint often falls just outside the mask. On city_boulevard, where cars pass
   // close, those corners bent mutual's route: fcis-like, pass-1 ATE 0.22 m with no margin,
-  // 0.11 m with 8 px (README).
+  // 0.10 m with 8 px (README).
   int instance_margin_px = 8;
-  double moving_share_threshold = 0.5;
   // An instance of a class that does not move (not on the moveable shortlist: a traffic
   // light, a bench, a hydrant) is judged moving only on at least this many measured
   // points. Its few matches are often wrong in a consistent way (a traffic light's three
