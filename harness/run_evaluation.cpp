@@ -47,7 +47,8 @@ struct LoggedFrame {
 };
 
 // frames.jsonl as slam_runner.cpp's WriteFrameLog writes it; a localized frame is one
-// whose status is not "lost" (slam::FrameResult::localized()).
+// whose status is not "lost", and on a loaded map one on that map
+// (slam::FrameResult::localized_on_map()).
 std::vector<LoggedFrame> ReadFrameLog(const fs::path& path) {
   std::ifstream in(path);
   if (!in) throw FileError(path, "eval: missing frame log; is this an output folder of segslam run?");
@@ -63,7 +64,7 @@ std::vector<LoggedFrame> ReadFrameLog(const fs::path& path) {
       frame.index = json.at("frame").get<int>();
       frame.stamp_s = json.at("stamp").get<double>();
       const std::string status = json.at("status").get<std::string>();
-      frame.localized = status != "lost";
+      frame.localized = status != "lost" && json.value("on_long_term_map", true);
       frame.features = json.value("features", 0);
       for (const nlohmann::json& instance : json.at("instances")) {
         frame.instances.push_back({instance.at("id").get<int>(), instance.at("judged").get<bool>(),

@@ -9,7 +9,9 @@
 // - RPE per second (evaluate_rpe.py --fixed_delta --delta 1 --delta_unit s), translation
 //   in metres and rotation in degrees; absent when the sequence is shorter than the
 //   delta (the reason is kept).
-// - The share of frames localized, from frames.jsonl.
+// - The share of frames localized, from frames.jsonl: tracked, and on a pass run on a
+//   loaded map, matched to that map (slam::FrameResult::localized_on_map()); a frame
+//   tracked only on the points the run made itself does not count.
 // - Raw vs refined mAP, AP50 and mIoU, from seg.json where the run wrote one (mutual
 //   loop with a segmenter on a sequence with ground-truth masks).
 // - Moving-object detection against the ground-truth tracks (tracks.json), see

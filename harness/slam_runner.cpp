@@ -225,7 +225,7 @@ SlamRunResult RunMutualLoop(const TumSequence& sequence, const SlamRunOptions& o
 
 double SlamRunResult::LocalizedShare() const {
   if (frames.empty()) return 0;
-  const auto localized = std::count_if(frames.begin(), frames.end(), [](const auto& f) { return f.localized(); });
+  const auto localized = std::count_if(frames.begin(), frames.end(), [](const auto& f) { return f.localized_on_map(); });
   return double(localized) / double(frames.size());
 }
 
@@ -287,6 +287,10 @@ void WriteFrameLog(const fs::path& path, const std::vector<slam::FrameResult>& f
     line["features_with_depth"] = frame.num_features_with_depth;
     line["coarse_inliers"] = frame.num_coarse_inliers;
     line["fine_inliers"] = frame.num_fine_inliers;
+    if (frame.num_long_term_inliers >= 0) {  // localization on a loaded map
+      line["long_term_inliers"] = frame.num_long_term_inliers;
+      line["on_long_term_map"] = frame.on_long_term_map;
+    }
     const slam::FrameTimings& t = frame.timings;
     line["timings_ms"] = {{"features", t.features_ms}, {"coarse", t.coarse_ms}, {"judge", t.judge_ms},
                           {"fine", t.fine_ms},         {"map_update", t.map_update_ms},

@@ -52,10 +52,11 @@ MutualFrameResult MutualLoop::ProcessFrame(const RgbdFrame& frame) {
   seg::RefinerInput input;
   input.current_initial = result.initial;
   input.camera = camera_;
-  // No projection without both poses; Refine then returns the initial regions with
-  // fresh ids, as on the first frame.
+  // No projection without both poses in one frame; Refine then returns the initial
+  // regions with fresh ids, as on the first frame.
   const bool can_project = previous_refined_.has_value() && previous_T_wc_fine_.has_value() &&
-                           T_wc_coarse.has_value() && !previous_depth_m_.empty();
+                           T_wc_coarse.has_value() && !tracker_.CoarsePoseRelocalized() &&
+                           !previous_depth_m_.empty();
   if (can_project) {
     input.previous_refined = &*previous_refined_;
     input.previous_depth_m = previous_depth_m_;

@@ -266,11 +266,11 @@ bool Tracker::Impl::InitializeMap() {
 
 // Relocalization against every map point: nearest-neighbour descriptor search with a
 // ratio test, RANSAC PnP, pose optimisation, then a local-map search.
-bool Tracker::Impl::Relocalize() {
+bool Tracker::Impl::Relocalize(bool long_term_only) {
   ClearMatches();
   std::vector<MapPoint*> candidates;
   for (const auto& owned : map->points()) {
-    if (!owned->bad) candidates.push_back(owned.get());
+    if (!owned->bad && (owned->fixed || !long_term_only)) candidates.push_back(owned.get());
   }
   if (candidates.size() < 20 || current.features.size() < 20) return false;
   cv::Mat map_descriptors(static_cast<int>(candidates.size()), kOrbDescriptorBytes, CV_8U);
@@ -308,6 +308,66 @@ bool Tracker::Impl::Relocalize() {
   }
   if (OptimizeCurrentPose(false, true) < 10) return false;
   return TrackLocalMap(options.min_relocalization_inliers, 5.0);
+}
+
+// ORB-SLAM2's localization mode: a frame tracked only on the points the run made itself
+// may be in the frame of a relocalization at a look-alike place (repeated facades) or
+// drifting; a relocalization on the long-term map says where it is. The points and
+// keyframes made since the run left the map are in the frame just found wrong: dropped,
+// so they neither match nor pull later poses.
+bool Tracker::Impl::RelocalizeOffMap() {
+  last_off_map_relocalization_s = current.stamp_s;
+  if (!Relocalize(true)) return false;
+  // Decided on what stays: a pose held up by the points about to be dropped is no pose.
+  int long_term_inliers = 0, kept_inliers = 0;
+  for (size_t i = 0; i < current.points.size(); ++i) {
+    const MapPoint* point = current.points[i];
+    if (point == nullptr || current.outlier[i]) continue;
+    long_term_inliers += point->fixed;
+    kept_inliers += point->fixed || point->id < first_point_off_map;
+  }
+  if (long_term_inliers < options.min_long_term_inliers || kept_inliers < options.min_relocalization_inliers) {
+    return false;
+  }
+  for (const auto& owned : map->points()) {
+    if (!owned->fixed && owned->id >= first_point_off_map) Map::MarkBad(owned.get());
+  }
+  for (const auto& keyframe : map->keyframes()) {
+    if (keyframe->frame_index >= off_map_since_frame) keyframe->bad = true;
+  }
+  if (reference_keyframe != nullptr && reference_keyframe->bad) reference_keyframe = nullptr;
+  for (size_t i = 0; i < current.points.size(); ++i) {
+    if (current.points[i] != nullptr && current.points[i]->bad) {
+      current.points[i] = nullptr;
+      current.outlier[i] = false;
+    }
+  }
+  result.num_coarse_inliers = OptimizeCurrentPose(false, false);
+  // The instance snapshots were taken in the frame just left: against them everything
+  // would seem to move.
+  history.clear();
+  return true;
+}
+
+void Tracker::Impl::NoteLongTermMapMatches() {
+  int inliers = 0;
+  for (size_t i = 0; fine_ok && i < current.points.size(); ++i) {
+    const MapPoint* point = current.points[i];
+    inliers += point != nullptr && !current.outlier[i] && point->fixed;
+  }
+  result.num_long_term_inliers = inliers;
+  result.on_long_term_map = fine_ok && inliers >= options.min_long_term_inliers;
+  if (!fine_ok) return;  // a lost frame says nothing of where the run is
+  if (result.on_long_term_map) {
+    off_long_term_map = false;
+  } else if (!off_long_term_map) {
+    // The first try comes an interval later: a frame or two with few matches on the map
+    // is common (a passing truck) and costs no search over the whole map.
+    off_long_term_map = true;
+    off_map_since_frame = current.index;
+    first_point_off_map = map->UpcomingPointId();
+    last_off_map_relocalization_s = current.stamp_s;
+  }
 }
 
 }  // namespace segslam::slam

@@ -121,6 +121,8 @@ class Map {
   const std::vector<std::unique_ptr<MapPoint>>& points() const { return points_; }
   size_t NumGoodPoints() const;
   std::uint64_t NextPointId() { return next_point_id_++; }
+  // The id the next point will get (ids only grow: a point made later has a larger one).
+  std::uint64_t UpcomingPointId() const { return next_point_id_; }
   std::uint64_t NextKeyframeId() { return next_keyframe_id_++; }
 
  private:

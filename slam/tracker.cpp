@@ -115,6 +115,9 @@ void CheckTrackerOptions(const TrackerOptions& options) {
   require(options.last_frame_radius_px > 0, "last_frame_radius_px", options.last_frame_radius_px, "must be positive");
   require(options.local_map_radius_px > 0, "local_map_radius_px", options.local_map_radius_px, "must be positive");
   require(options.motion_baseline_s >= 0, "motion_baseline_s", options.motion_baseline_s, "must be >= 0");
+  require(options.min_long_term_inliers >= 1, "min_long_term_inliers", options.min_long_term_inliers, "must be >= 1");
+  require(options.off_map_relocalization_interval_s >= 0, "off_map_relocalization_interval_s",
+          options.off_map_relocalization_interval_s, "must be >= 0");
 }
 
 }  // namespace
@@ -164,7 +167,7 @@ void Tracker::BeginFrame(const RgbdFrame& frame) {
   s.current.instance.assign(n, 0);
   s.current.near_instance.assign(n, 0);
   s.current.excluded.assign(n, false);
-  s.coarse_ok = s.fine_ok = s.judged = false;
+  s.coarse_ok = s.fine_ok = s.judged = s.pose_jumped = false;
   s.dropped_moveable_records.clear();
   s.result = FrameResult();
   s.result.frame_index = frame.index;
@@ -224,16 +227,24 @@ std::optional<Eigen::Isometry3d> Tracker::EstimateCoarsePose() {
     // again in UpdateMaps() on those that may enter the map).
     tracked = s.InitializeMap();
   } else if (s.have_last && !s.last_lost()) {
-    tracked = s.TrackWithMotionModel() || s.TrackReferenceKeyframe();
-    if (tracked) {
-      s.MarkCurrentMatched();
-      const bool recently_relocalized = s.current.index - s.last_relocalization_frame < 30;
-      tracked = s.TrackLocalMap(recently_relocalized ? options_.min_relocalization_inliers : options_.min_tracking_inliers,
-                                options_.local_map_radius_px);
+    if (s.localization_mode && s.off_long_term_map &&
+        s.current.stamp_s - s.last_off_map_relocalization_s >= options_.off_map_relocalization_interval_s - 1e-9) {
+      relocalized = s.pose_jumped = tracked = s.RelocalizeOffMap();
+      if (relocalized) s.last_relocalization_frame = s.current.index;
+    }
+    if (!relocalized) {
+      tracked = s.TrackWithMotionModel() || s.TrackReferenceKeyframe();
+      if (tracked) {
+        s.MarkCurrentMatched();
+        const bool recently_relocalized = s.current.index - s.last_relocalization_frame < 30;
+        tracked = s.TrackLocalMap(
+            recently_relocalized ? options_.min_relocalization_inliers : options_.min_tracking_inliers,
+            options_.local_map_radius_px);
+      }
     }
   }
   if (!tracked && !s.pending_first_keyframe) {
-    relocalized = s.Relocalize();
+    relocalized = s.Relocalize(false);
     tracked = relocalized;
     if (relocalized) {
       s.initialized = true;
@@ -257,6 +268,8 @@ std::optional<Eigen::Isometry3d> Tracker::EstimateCoarsePose() {
   s.result.T_wc_coarse = s.current.T_cw.inverse();
   return s.result.T_wc_coarse;
 }
+
+bool Tracker::CoarsePoseRelocalized() const { return impl_->result.status == TrackingStatus::kRelocalized; }
 
 std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& instances) {
   Impl& s = *impl_;
@@ -346,6 +359,7 @@ std::optional<Eigen::Isometry3d> Tracker::EstimateFinePose() {
     if (s.current.points[i] != nullptr && !s.current.outlier[i]) ++inliers;
   }
   s.result.num_fine_inliers = inliers;
+  if (s.localization_mode) s.NoteLongTermMapMatches();
   if (s.coarse_ok && !s.fine_ok) s.result.status = TrackingStatus::kLost;
   if (options_.record_features) s.result.feature_records = s.FeatureRecords();
   s.result.timings.fine_ms = MsSince(start);
@@ -382,8 +396,9 @@ FrameResult Tracker::UpdateMaps() {
       s.CreateKeyframe();
     }
     s.result.T_wc = s.current.T_cw.inverse();
-    s.velocity = s.have_last && !s.last_lost() ? std::optional<Eigen::Isometry3d>(s.current.T_cw * s.last.T_cw.inverse())
-                                                : std::nullopt;
+    // A pose that jumped (Impl::RelocalizeOffMap) gives no velocity.
+    const bool continuous = s.have_last && !s.last_lost() && !s.pose_jumped;
+    s.velocity = continuous ? std::optional<Eigen::Isometry3d>(s.current.T_cw * s.last.T_cw.inverse()) : std::nullopt;
     s.history.push_back(s.Snapshot());
     // What the next frame needs is kept: it is later than this one.
     s.ForgetSnapshotsBefore(s.current.stamp_s);

@@ -126,6 +126,14 @@ struct FrameResult {
   int num_features_with_depth = 0;
   int num_coarse_inliers = 0;
   int num_fine_inliers = 0;
+  // Localization mode (a long-term map loaded): the fine pose's inliers on the loaded
+  // map's points; -1 when no map was loaded.
+  int num_long_term_inliers = -1;
+  // Tracked, and in localization mode matched to the long-term map (at least
+  // TrackerOptions::min_long_term_inliers of them). A frame tracked on the points it made
+  // itself is tracked but not localized on the map: the paper's pass-2 figure counts
+  // these, and a relocalization at a look-alike place 100 m off then shows as what it is.
+  bool on_long_term_map = false;
   bool keyframe = false;
   // The map was dropped at this (lost) frame, to begin anew (TrackerOptions::
   // reset_map_keyframes): the poses of the frames before it are in a frame that no longer
@@ -134,6 +142,7 @@ struct FrameResult {
   std::vector<InstanceJudgement> instances;
   FrameTimings timings;
   bool localized() const { return status != TrackingStatus::kLost; }
+  bool localized_on_map() const { return localized() && (num_long_term_inliers < 0 || on_long_term_map); }
   // One record per extracted feature (num_features of them), filled by EstimateFinePose()
   // only when TrackerOptions::record_features is set.
   std::vector<FeatureRecord> feature_records;
@@ -162,6 +171,15 @@ struct TrackerOptions {
   // relocalization, as ORB-SLAM, so a wrong relocalization does not stick).
   int min_tracking_inliers = 30;
   int min_relocalization_inliers = 50;
+  // Localization mode: a frame with fewer fine-pose inliers on the long-term map's points
+  // than this is off the map (ORB-SLAM2's localization mode counts 10), tracked only on
+  // the points it made itself, which drift or may sit in the frame of a wrong
+  // relocalization. While off the map the tracker tries to relocalize on the long-term
+  // map every off_map_relocalization_interval_s and takes the pose it finds (as ORB-SLAM2
+  // does each frame); the points made since it left the map are dropped then, as they
+  // are in the frame it has just found to be wrong.
+  int min_long_term_inliers = 10;
+  double off_map_relocalization_interval_s = 0.5;
   // Keyframes (ORB-SLAM2 RGB-D rules): a new one when the tracked inliers fall below
   // this share of the reference keyframe's points, or too few close points are tracked
   // (and more than 15 are: ORB-SLAM2's frame-count rules only ever add to these, with
@@ -253,6 +271,9 @@ class Tracker {
   // Step 1. Returns the coarse T_wc, or nullopt when the frame cannot be tracked or
   // relocalized (then the frame is lost and the later steps only record that).
   std::optional<Eigen::Isometry3d> EstimateCoarsePose();
+  // After step 1: the coarse pose came from a relocalization, not from the last frame's
+  // pose, so the two need not be in one frame (off the long-term map it may jump).
+  bool CoarsePoseRelocalized() const;
   // Step 3 with the refined masks of this frame. Where DESIGN.md measures motion with
   // the coarse pose, this measures it with the pose of the background (the coarse
   // matches, rejected ones too, of the features on no moveable-class instance), when at

@@ -214,6 +214,13 @@ struct Tracker::Impl {
   double lost_since_s = -1;  // stamp of the first frame of the current run of lost frames
   bool reset_map = false;    // drop the map once this frame is done
   bool localization_mode = false;
+  // Localization mode: the last frame was off the long-term map (FrameResult::
+  // on_long_term_map); the first frame and the first point made since; when relocalizing
+  // on the map was last tried.
+  bool off_long_term_map = false;
+  int off_map_since_frame = 0;
+  std::uint64_t first_point_off_map = 0;
+  double last_off_map_relocalization_s = -1e9;
   std::deque<InstanceSnapshot> history;
   std::map<std::uint16_t, InstanceMotionMemory> motion_memory;  // per instance id
   std::vector<MapPoint*> recent_points;
@@ -221,6 +228,7 @@ struct Tracker::Impl {
 
   // Per-frame state.
   bool coarse_ok = false;
+  bool pose_jumped = false;  // relocalized away from the pose tracking gave (off the map)
   bool fine_ok = false;
   bool judged = false;
   FrameResult result;
@@ -278,7 +286,13 @@ struct Tracker::Impl {
   bool TrackReferenceKeyframe();
   bool TrackLocalMap(int min_inliers, double radius_factor);
   bool InitializeMap();
-  bool Relocalize();
+  // Against every map point, or with `long_term_only` against the loaded map's.
+  bool Relocalize(bool long_term_only);
+  // Off the long-term map: relocalizes on it, and on success drops what was made off it.
+  bool RelocalizeOffMap();
+  // Localization mode, after the fine pose: counts its inliers on the long-term map into
+  // the result and notes when the run leaves the map.
+  void NoteLongTermMapMatches();
 
   // ------------------------------------------- judgement helpers (instance_judgement.cpp)
 

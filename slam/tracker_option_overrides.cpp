@@ -34,6 +34,8 @@ const NamedOptionTable<TrackerOptions>& Table() {
       SEGSLAM_REAL(local_map_radius_px),
       SEGSLAM_INT(min_tracking_inliers),
       SEGSLAM_INT(min_relocalization_inliers),
+      SEGSLAM_INT(min_long_term_inliers),
+      SEGSLAM_REAL(off_map_relocalization_interval_s),
       SEGSLAM_REAL(keyframe_tracked_ratio),
       SEGSLAM_REAL(close_depth_m),
       SEGSLAM_BOOL(local_bundle_adjustment),

@@ -108,6 +108,34 @@ TEST_F(RunEvaluationTest, PassTwoIsScoredWithPassOnesAlignment) {
   EXPECT_TRUE(std::isnan(metrics.at("seg_refined_map")));
 }
 
+// A pass on a loaded map counts as localized only the frames matched to that map: a
+// frame tracked on the points the run made itself ("on_long_term_map": false) is in the
+// trajectory and in the ATE, but not in the localized share.
+TEST_F(RunEvaluationTest, PassTwoCountsOnlyFramesOnTheLongTermMapAsLocalized) {
+  WriteSequence(dir_ / "data" / "pass1", GroundTruth(0));
+  WriteSequence(dir_ / "data" / "pass2", GroundTruth(0.5));
+  WriteRun(dir_ / "run" / "pass1", GroundTruth(0), "");
+  const std::vector<StampedPose> pass2 = GroundTruth(0.5);
+  WriteRun(dir_ / "run" / "pass2", pass2, "");
+  std::ofstream frames(dir_ / "run" / "pass2" / "frames.jsonl");
+  int off_map = 0;
+  for (std::size_t i = 0; i < pass2.size(); ++i) {
+    const bool on_map = i % 4 != 0;
+    off_map += !on_map;
+    frames << "{\"frame\": " << i << ", \"stamp\": " << std::fixed << pass2[i].stamp_s
+           << ", \"status\": \"tracking\", \"long_term_inliers\": " << (on_map ? 80 : 3)
+           << ", \"on_long_term_map\": " << (on_map ? "true" : "false") << ", \"instances\": []}\n";
+  }
+  frames.close();
+  ASSERT_GT(off_map, 0);
+  const RunEvaluation evaluation = EvaluateRun(dir_ / "run", dir_ / "data");
+  ASSERT_EQ(evaluation.passes.size(), 2u);
+  EXPECT_DOUBLE_EQ(evaluation.passes[0].LocalizedShare(), 1.0);
+  EXPECT_EQ(evaluation.passes[1].localized_frames, static_cast<int>(pass2.size()) - off_map);
+  ASSERT_TRUE(evaluation.passes[1].ate_m.has_value());
+  EXPECT_LT(evaluation.passes[1].ate_m->rmse, 1e-6);
+}
+
 // Pass 1 lost its map (two poses: no ATE, no alignment): pass 2 has no map frame to be
 // scored in, and is not aligned on its own instead.
 TEST_F(RunEvaluationTest, PassTwoHasNoAteWithoutPassOnesAlignment) {

@@ -504,6 +504,71 @@ TEST(TrackerTest, OracleTakesTheGivenVerdictsOverWhatItMeasures) {
   EXPECT_GT(sliding_points, 0u) << "the box said to stand was not mapped";
 }
 
+// A pan from the back wall of the room (x = 4 m, the only thing in view at 3 m) to the
+// side wall at y = +3 m, over two seconds.
+Eigen::Isometry3d PanToSideWallPose(int frame) {
+  const double turned = std::clamp(frame / 60.0, 0.0, 1.0);
+  return testing::LookingAlongX(Eigen::Vector3d(1.0, 0.0, 1.5), turned * M_PI / 2);
+}
+
+// The look-alike trap of a long-term map (repeated facades along a boulevard): the map's
+// copy of the back wall lies 0.78 m from where the wall is, so the second visit, which
+// starts facing that wall, relocalizes 0.78 m off and tracks there, on the map. Once it
+// has turned to the side wall, whose map points are right, it tracks on points it made
+// itself: off the map, which the frames say, until a relocalization on the map puts it
+// back where it is.
+TEST(TrackerTest, RelocalizationAtALookAlikePlaceIsCorrectedOnceOffTheMap) {
+  const PinholeCamera camera = TestCamera();
+  const auto room = RoomQuads(5);
+  Tracker mapper(camera, StartingAt(PanToSideWallPose(0)));
+  for (int i = 0; i <= 60; ++i) {
+    ASSERT_TRUE(mapper.Track(RenderQuads(room, camera, PanToSideWallPose(i), i, i / 30.0).frame, nullptr,
+                             SlamMode::kPlain)
+                    .localized());
+  }
+  LongTermMapData map = mapper.ExportLongTermMap(true);
+  const Eigen::Vector3d look_alike_offset(-0.5, 0.6, 0.0);
+  int moved = 0;
+  for (StoredMapPoint& point : map.points) {
+    if (point.position_w.x() < 3.9) continue;
+    point.position_w += look_alike_offset;
+    ++moved;
+  }
+  ASSERT_GT(moved, 200);
+
+  auto second_visit = [&](double off_map_relocalization_interval_s, std::vector<FrameResult>* frames) {
+    TrackerOptions options;
+    options.off_map_relocalization_interval_s = off_map_relocalization_interval_s;
+    Tracker localizer(camera, options);
+    localizer.LoadLongTermMap(map, "look-alike map");
+    for (int i = 0; i < 120; ++i) {
+      frames->push_back(
+          localizer.Track(RenderQuads(room, camera, PanToSideWallPose(i), i, i / 30.0).frame, nullptr, SlamMode::kPlain));
+      ASSERT_TRUE(frames->back().localized()) << "frame " << i;
+    }
+  };
+  std::vector<FrameResult> never_retried;
+  second_visit(1e9, &never_retried);
+  // The trap works: facing the wall the visit is on the map, 0.78 m off ...
+  EXPECT_TRUE(never_retried[5].on_long_term_map);
+  EXPECT_GT(never_retried[5].num_long_term_inliers, 100);
+  EXPECT_NEAR(PositionError(never_retried[5].T_wc, PanToSideWallPose(5)), look_alike_offset.norm(), 0.05);
+  // ... and facing the side wall it is still off, and says it is off the map.
+  EXPECT_GT(PositionError(never_retried.back().T_wc, PanToSideWallPose(119)), 0.5);
+  EXPECT_FALSE(never_retried.back().on_long_term_map);
+  EXPECT_FALSE(never_retried.back().localized_on_map());
+
+  std::vector<FrameResult> retried;
+  second_visit(0.5, &retried);
+  int jumps = 0;
+  for (size_t i = 1; i < retried.size(); ++i) jumps += retried[i].status == TrackingStatus::kRelocalized;
+  EXPECT_EQ(jumps, 1);
+  for (int i = 100; i < 120; ++i) {
+    EXPECT_TRUE(retried[static_cast<size_t>(i)].on_long_term_map) << "frame " << i;
+    EXPECT_LT(PositionError(retried[static_cast<size_t>(i)].T_wc, PanToSideWallPose(i)), 0.02) << "frame " << i;
+  }
+}
+
 // The second visit of a room (localization on the first visit's long-term map) with a
 // panel that was not there before, standing in front of the mapped back wall and
 // printed with the part of the wall it hides: the worst case of a repetitive façade
