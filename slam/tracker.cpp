@@ -227,7 +227,7 @@ std::optional<Eigen::Isometry3d> Tracker::EstimateCoarsePose() {
     // again in UpdateMaps() on those that may enter the map).
     tracked = s.InitializeMap();
   } else if (s.have_last && !s.last_lost()) {
-    if (s.localization_mode && s.off_long_term_map &&
+    if (s.localization_mode && options_.relocalize_off_map && s.off_long_term_map &&
         s.current.stamp_s - s.last_off_map_relocalization_s >= options_.off_map_relocalization_interval_s - 1e-9) {
       relocalized = s.pose_jumped = tracked = s.RelocalizeOffMap();
       if (relocalized) s.last_relocalization_frame = s.current.index;

@@ -174,11 +174,13 @@ struct TrackerOptions {
   // Localization mode: a frame with fewer fine-pose inliers on the long-term map's points
   // than this is off the map (ORB-SLAM2's localization mode counts 10), tracked only on
   // the points it made itself, which drift or may sit in the frame of a wrong
-  // relocalization. While off the map the tracker tries to relocalize on the long-term
-  // map every off_map_relocalization_interval_s and takes the pose it finds (as ORB-SLAM2
-  // does each frame); the points made since it left the map are dropped then, as they
-  // are in the frame it has just found to be wrong.
+  // relocalization. While off the map the tracker (with relocalize_off_map) tries to
+  // relocalize on the long-term map, at most once an off_map_relocalization_interval_s
+  // (a search over the whole map: 0.6 s on a city route's), and takes the pose it finds,
+  // as ORB-SLAM2 does each frame; the points made since it left the map are dropped then,
+  // as they are in the frame it has just found to be wrong.
   int min_long_term_inliers = 10;
+  bool relocalize_off_map = true;
   double off_map_relocalization_interval_s = 0.5;
   // Keyframes (ORB-SLAM2 RGB-D rules): a new one when the tracked inliers fall below
   // this share of the reference keyframe's points, or too few close points are tracked

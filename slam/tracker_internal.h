@@ -216,7 +216,7 @@ struct Tracker::Impl {
   bool localization_mode = false;
   // Localization mode: the last frame was off the long-term map (FrameResult::
   // on_long_term_map); the first frame and the first point made since; when relocalizing
-  // on the map was last tried.
+  // on the map was last tried (at most once an off_map_relocalization_interval_s).
   bool off_long_term_map = false;
   int off_map_since_frame = 0;
   std::uint64_t first_point_off_map = 0;

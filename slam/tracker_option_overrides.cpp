@@ -35,6 +35,7 @@ const NamedOptionTable<TrackerOptions>& Table() {
       SEGSLAM_INT(min_tracking_inliers),
       SEGSLAM_INT(min_relocalization_inliers),
       SEGSLAM_INT(min_long_term_inliers),
+      SEGSLAM_BOOL(relocalize_off_map),
       SEGSLAM_REAL(off_map_relocalization_interval_s),
       SEGSLAM_REAL(keyframe_tracked_ratio),
       SEGSLAM_REAL(close_depth_m),

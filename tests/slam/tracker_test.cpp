@@ -536,9 +536,9 @@ TEST(TrackerTest, RelocalizationAtALookAlikePlaceIsCorrectedOnceOffTheMap) {
   }
   ASSERT_GT(moved, 200);
 
-  auto second_visit = [&](double off_map_relocalization_interval_s, std::vector<FrameResult>* frames) {
+  auto second_visit = [&](bool relocalize_off_map, std::vector<FrameResult>* frames) {
     TrackerOptions options;
-    options.off_map_relocalization_interval_s = off_map_relocalization_interval_s;
+    options.relocalize_off_map = relocalize_off_map;
     Tracker localizer(camera, options);
     localizer.LoadLongTermMap(map, "look-alike map");
     for (int i = 0; i < 120; ++i) {
@@ -548,7 +548,7 @@ TEST(TrackerTest, RelocalizationAtALookAlikePlaceIsCorrectedOnceOffTheMap) {
     }
   };
   std::vector<FrameResult> never_retried;
-  second_visit(1e9, &never_retried);
+  second_visit(false, &never_retried);
   // The trap works: facing the wall the visit is on the map, 0.78 m off ...
   EXPECT_TRUE(never_retried[5].on_long_term_map);
   EXPECT_GT(never_retried[5].num_long_term_inliers, 100);
@@ -559,7 +559,7 @@ TEST(TrackerTest, RelocalizationAtALookAlikePlaceIsCorrectedOnceOffTheMap) {
   EXPECT_FALSE(never_retried.back().localized_on_map());
 
   std::vector<FrameResult> retried;
-  second_visit(0.5, &retried);
+  second_visit(true, &retried);
   int jumps = 0;
   for (size_t i = 1; i < retried.size(); ++i) jumps += retried[i].status == TrackingStatus::kRelocalized;
   EXPECT_EQ(jumps, 1);
