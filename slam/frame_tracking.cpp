@@ -265,33 +265,61 @@ bool Tracker::Impl::InitializeMap() {
 }
 
 // Relocalization against every map point: nearest-neighbour descriptor search with a
-// ratio test, RANSAC PnP, pose optimisation, then a local-map search.
+// ratio test, RANSAC PnP, pose optimisation, then a local-map search. The loaded map's
+// points never change, so they are searched through an index built once (by brute
+// force a relocalization on city_boulevard's map took 0.6 s); the points the run made,
+// which change every keyframe, are searched exhaustively.
 bool Tracker::Impl::Relocalize(bool long_term_only) {
   ClearMatches();
-  std::vector<MapPoint*> candidates;
-  for (const auto& owned : map->points()) {
-    if (!owned->bad && (owned->fixed || !long_term_only)) candidates.push_back(owned.get());
+  if (current.features.size() < 20) return false;
+  if (localization_mode && long_term_index == nullptr) {
+    cv::Mat descriptors;
+    for (const auto& owned : map->points()) {
+      if (!owned->fixed) continue;
+      long_term_points.push_back(owned.get());
+      descriptors.push_back(cv::Mat(1, kOrbDescriptorBytes, CV_8U, owned->descriptor.data()));
+    }
+    long_term_index = std::make_unique<DescriptorIndex>(descriptors);
   }
-  if (candidates.size() < 20 || current.features.size() < 20) return false;
-  cv::Mat map_descriptors(static_cast<int>(candidates.size()), kOrbDescriptorBytes, CV_8U);
-  for (size_t k = 0; k < candidates.size(); ++k) {
-    std::copy(candidates[k]->descriptor.begin(), candidates[k]->descriptor.end(),
-              map_descriptors.ptr<std::uint8_t>(static_cast<int>(k)));
+  // Rows: the indexed long-term points first, then the run's own.
+  std::vector<MapPoint*> searched = localization_mode ? long_term_points : std::vector<MapPoint*>();
+  std::vector<NearestTwo> nearest(current.features.size());
+  if (localization_mode) nearest = long_term_index->Search(current.features.descriptors);
+  const size_t indexed = searched.size();
+  if (!long_term_only) {
+    for (const auto& owned : map->points()) {
+      if (!owned->bad && !owned->fixed) searched.push_back(owned.get());
+    }
   }
-  cv::BFMatcher matcher(cv::NORM_HAMMING);
-  std::vector<std::vector<cv::DMatch>> knn;
-  matcher.knnMatch(current.features.descriptors, map_descriptors, knn, 2);
+  if (searched.size() < 20) return false;
+  if (searched.size() > indexed) {
+    cv::Mat own_descriptors(static_cast<int>(searched.size() - indexed), kOrbDescriptorBytes, CV_8U);
+    for (size_t k = indexed; k < searched.size(); ++k) {
+      std::copy(searched[k]->descriptor.begin(), searched[k]->descriptor.end(),
+                own_descriptors.ptr<std::uint8_t>(static_cast<int>(k - indexed)));
+    }
+    cv::BFMatcher matcher(cv::NORM_HAMMING);
+    std::vector<std::vector<cv::DMatch>> knn;
+    matcher.knnMatch(current.features.descriptors, own_descriptors, knn, 2);
+    for (const auto& pair : knn) {
+      for (const cv::DMatch& match : pair) {
+        nearest[static_cast<size_t>(match.queryIdx)].Offer(static_cast<int>(indexed) + match.trainIdx,
+                                                            static_cast<int>(match.distance));
+      }
+    }
+  }
   std::vector<cv::Point3f> object_points;
   std::vector<cv::Point2f> image_points;
   std::vector<std::pair<int, MapPoint*>> matched;
-  for (const auto& pair : knn) {
-    if (pair.empty() || pair[0].distance > 64) continue;
-    if (pair.size() > 1 && pair[0].distance > options.relocalization_ratio * pair[1].distance) continue;
-    MapPoint* point = candidates[static_cast<size_t>(pair[0].trainIdx)];
+  for (size_t i = 0; i < nearest.size(); ++i) {
+    const NearestTwo& found = nearest[i];
+    if (found.best < 0 || found.best_distance > 64) continue;
+    if (found.best_distance > options.relocalization_ratio * found.second_distance) continue;
+    MapPoint* point = searched[static_cast<size_t>(found.best)];
     const Eigen::Vector3d& p = point->position_w;
     object_points.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()));
-    image_points.push_back(current.features.keypoints[static_cast<size_t>(pair[0].queryIdx)].pt);
-    matched.emplace_back(pair[0].queryIdx, point);
+    image_points.push_back(current.features.keypoints[i].pt);
+    matched.emplace_back(static_cast<int>(i), point);
   }
   if (matched.size() < 15) return false;
   cv::Mat rvec, tvec;

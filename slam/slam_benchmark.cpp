@@ -1,16 +1,21 @@
 // Speed of the per-frame SLAM building blocks on one core (run under `taskset -c 0`).
 // Targets: Extract (1000 features, 640x480) median <= 8 ms; OptimizePose with 500
 // observations median <= 2 ms. RunBundleAdjustment (10 keyframes, 2000 points) has no
-// target: it runs on the mapping side, not per frame.
+// target: it runs on the mapping side, not per frame. RelocalizationSearch: a frame's 1000
+// descriptors against a city route's long-term map (50 000 points), brute force against
+// the index of slam/descriptor_index.h (no target: it runs on a relocalization).
 #include <benchmark/benchmark.h>
 
 #include <filesystem>
 #include <opencv2/core.hpp>
+#include <opencv2/features2d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <random>
 
 #include "slam/bundle_adjustment.h"
+#include "slam/descriptor_index.h"
+#include "slam/orb_descriptor.h"
 #include "slam/orb_extractor.h"
 #include "slam/pose_optimizer.h"
 
@@ -179,6 +184,37 @@ void BM_BundleAdjustment(benchmark::State& state) {
   state.counters["observations"] = static_cast<double>(observations.size());
 }
 BENCHMARK(BM_BundleAdjustment)->Unit(benchmark::kMillisecond);
+
+// Map descriptors uniformly random; the frame's are copies of 1000 of them with 40 bits
+// flipped (real ORB bits are skewed, which fills some buckets more: the index's figure is
+// a lower bound).
+void BM_RelocalizationSearch(benchmark::State& state) {
+  const bool use_index = state.range(0) == 1;
+  cv::Mat map_descriptors(50000, kOrbDescriptorBytes, CV_8U);
+  cv::RNG rng(5);
+  rng.fill(map_descriptors, cv::RNG::UNIFORM, 0, 256);
+  cv::Mat frame_descriptors(1000, kOrbDescriptorBytes, CV_8U);
+  for (int q = 0; q < frame_descriptors.rows; ++q) {
+    map_descriptors.row(rng.uniform(0, map_descriptors.rows)).copyTo(frame_descriptors.row(q));
+    for (int n = 0; n < 40; ++n) {
+      const int bit = rng.uniform(0, kOrbDescriptorBytes * 8);
+      frame_descriptors.at<std::uint8_t>(q, bit / 8) ^= static_cast<std::uint8_t>(1 << (bit % 8));
+    }
+  }
+  const DescriptorIndex index(map_descriptors);
+  for (auto _ : state) {
+    if (use_index) {
+      benchmark::DoNotOptimize(index.Search(frame_descriptors));
+    } else {
+      cv::BFMatcher matcher(cv::NORM_HAMMING);
+      std::vector<std::vector<cv::DMatch>> knn;
+      matcher.knnMatch(frame_descriptors, map_descriptors, knn, 2);
+      benchmark::DoNotOptimize(knn);
+    }
+  }
+  state.SetLabel(use_index ? "descriptor index" : "brute force");
+}
+BENCHMARK(BM_RelocalizationSearch)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace segslam::slam

@@ -14,7 +14,8 @@
 // RANSAC PnP, then projection matching against the local map (every map point whose
 // frustum, scale range, viewing angle and depth-occlusion test admit it), each followed
 // by robust pose optimisation (slam/pose_optimizer.h). When that fails the frame is lost
-// and the tracker relocalizes against all map points (descriptor search, RANSAC PnP); a
+// and the tracker relocalizes against all map points (descriptor search, through an LSH
+// index for a loaded map's, slam/descriptor_index.h; RANSAC PnP); a
 // young map that stays lost is dropped and begun anew (TrackerOptions::reset_map_keyframes).
 //
 // Localization (the paper's second pass): LoadLongTermMap() makes the loaded points

@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <deque>
 #include <map>
+#include <memory>
 #include <optional>
 #include <unordered_set>
 #include <vector>
@@ -23,6 +24,7 @@
 #include <opencv2/core/eigen.hpp>
 
 #include "slam/bundle_adjustment.h"
+#include "slam/descriptor_index.h"
 #include "slam/map.h"
 #include "slam/pose_optimizer.h"
 #include "slam/tracker.h"
@@ -221,6 +223,10 @@ struct Tracker::Impl {
   int off_map_since_frame = 0;
   std::uint64_t first_point_off_map = 0;
   double last_off_map_relocalization_s = -1e9;
+  // The loaded map's points and their descriptor index (Relocalize), built at the first
+  // relocalization of a localization run.
+  std::vector<MapPoint*> long_term_points;
+  std::unique_ptr<DescriptorIndex> long_term_index;
   std::deque<InstanceSnapshot> history;
   std::map<std::uint16_t, InstanceMotionMemory> motion_memory;  // per instance id
   std::vector<MapPoint*> recent_points;
