@@ -13,18 +13,6 @@ int Bit(const std::uint8_t* descriptor, int bit) { return (descriptor[bit >> 3] 
 
 }  // namespace
 
-void NearestTwo::Offer(int index, int distance) {
-  if (distance < best_distance) {
-    second = best;
-    second_distance = best_distance;
-    best = index;
-    best_distance = distance;
-  } else if (distance < second_distance) {
-    second = index;
-    second_distance = distance;
-  }
-}
-
 DescriptorIndex::DescriptorIndex(const cv::Mat& descriptors, const DescriptorIndexOptions& options)
     : options_(options), descriptors_(descriptors.clone()) {
   if (!descriptors.empty() && (descriptors.type() != CV_8U || descriptors.cols != kOrbDescriptorBytes)) {

@@ -36,8 +36,18 @@ struct NearestTwo {
   int best_distance = 257;
   int second = -1;
   int second_distance = 257;
-  // Keeps the two smallest of what it is offered.
-  void Offer(int index, int distance);
+  // Keeps the two smallest of what it is offered (the first offered wins a tie).
+  void Offer(int index, int distance) {
+    if (distance < best_distance) {
+      second = best;
+      second_distance = best_distance;
+      best = index;
+      best_distance = distance;
+    } else if (distance < second_distance) {
+      second = index;
+      second_distance = distance;
+    }
+  }
 };
 
 class DescriptorIndex {

@@ -51,25 +51,20 @@ MapPoint* Tracker::Impl::MatchedPoint(size_t i) const {
 // match yet; returns -1 if none passes the distance limit and the ratio test.
 int Tracker::Impl::BestCandidate(const OrbDescriptor& descriptor, const std::vector<int>& candidates, int max_distance,
                                  float ratio) const {
-  int best = 256, second = 256, best_index = -1, best_level = -1, second_level = -1;
+  NearestTwo nearest;
   for (int index : candidates) {
     if (current.points[static_cast<size_t>(index)] != nullptr) continue;
-    const int d = DescriptorDistance(descriptor.data(), current.features.descriptors.ptr<std::uint8_t>(index));
-    const int level = current.features.keypoints[static_cast<size_t>(index)].octave;
-    if (d < best) {
-      second = best;
-      second_level = best_level;
-      best = d;
-      best_index = index;
-      best_level = level;
-    } else if (d < second) {
-      second = d;
-      second_level = level;
-    }
+    nearest.Offer(index, DescriptorDistance(descriptor.data(), current.features.descriptors.ptr<std::uint8_t>(index)));
   }
-  if (best_index < 0 || best > max_distance) return -1;
-  if (ratio < 1.0f && best_level == second_level && best > ratio * second) return -1;
-  return best_index;
+  if (nearest.best < 0 || nearest.best_distance > max_distance) return -1;
+  const auto level = [&](int index) { return current.features.keypoints[static_cast<size_t>(index)].octave; };
+  // The ratio test compares like with like: a second match on another pyramid level is
+  // another scale of the same corner, not a rival.
+  if (ratio < 1.0f && nearest.second >= 0 && level(nearest.best) == level(nearest.second) &&
+      nearest.best_distance > ratio * nearest.second_distance) {
+    return -1;
+  }
+  return nearest.best;
 }
 
 // Projects the matched points of the last frame into the current one (ORB-SLAM's
