@@ -259,11 +259,33 @@ bool Tracker::Impl::InitializeMap() {
   return true;
 }
 
+// The run's own points (not the loaded map's, not bad) and their descriptor index,
+// rebuilt only when points were made or purged since: points never change their
+// descriptor, and one marked bad since is skipped where it is matched.
+const DescriptorIndex& Tracker::Impl::OwnPointIndex() {
+  const std::uint64_t upcoming_point_id = map->UpcomingPointId();
+  const size_t map_size = map->points().size();
+  if (own_index != nullptr && own_index_upcoming_point_id == upcoming_point_id && own_index_map_size == map_size) {
+    return *own_index;
+  }
+  own_points.clear();
+  cv::Mat descriptors;
+  for (const auto& owned : map->points()) {
+    if (owned->bad || owned->fixed) continue;
+    own_points.push_back(owned.get());
+    descriptors.push_back(cv::Mat(1, kOrbDescriptorBytes, CV_8U, owned->descriptor.data()));
+  }
+  own_index = std::make_unique<DescriptorIndex>(descriptors);
+  own_index_upcoming_point_id = upcoming_point_id;
+  own_index_map_size = map_size;
+  return *own_index;
+}
+
 // Relocalization against every map point: nearest-neighbour descriptor search with a
-// ratio test, RANSAC PnP, pose optimisation, then a local-map search. The loaded map's
-// points never change, so they are searched through an index built once (by brute
-// force a relocalization on city_boulevard's map took 0.6 s); the points the run made,
-// which change every keyframe, are searched exhaustively.
+// ratio test, RANSAC PnP, pose optimisation, then a local-map search. The search goes
+// through descriptor indexes (by brute force a relocalization on city_boulevard's map
+// took 0.6 s, and a lost run pays it every frame): the loaded map's, built once, and
+// the run's own points', rebuilt when they changed.
 bool Tracker::Impl::Relocalize(bool long_term_only) {
   ClearMatches();
   if (current.features.size() < 20) return false;
@@ -276,33 +298,22 @@ bool Tracker::Impl::Relocalize(bool long_term_only) {
     }
     long_term_index = std::make_unique<DescriptorIndex>(descriptors);
   }
-  // Rows: the indexed long-term points first, then the run's own.
+  // Rows: the long-term points first, then the run's own.
   std::vector<MapPoint*> searched = localization_mode ? long_term_points : std::vector<MapPoint*>();
   std::vector<NearestTwo> nearest(current.features.size());
   if (localization_mode) nearest = long_term_index->Search(current.features.descriptors);
-  const size_t indexed = searched.size();
   if (!long_term_only) {
-    for (const auto& owned : map->points()) {
-      if (!owned->bad && !owned->fixed) searched.push_back(owned.get());
+    const DescriptorIndex& own = OwnPointIndex();
+    const int offset = static_cast<int>(searched.size());
+    searched.insert(searched.end(), own_points.begin(), own_points.end());
+    const std::vector<NearestTwo> own_nearest = own.Search(current.features.descriptors);
+    for (size_t i = 0; i < nearest.size(); ++i) {
+      const NearestTwo& found = own_nearest[i];
+      if (found.best >= 0) nearest[i].Offer(offset + found.best, found.best_distance);
+      if (found.second >= 0) nearest[i].Offer(offset + found.second, found.second_distance);
     }
   }
   if (searched.size() < 20) return false;
-  if (searched.size() > indexed) {
-    cv::Mat own_descriptors(static_cast<int>(searched.size() - indexed), kOrbDescriptorBytes, CV_8U);
-    for (size_t k = indexed; k < searched.size(); ++k) {
-      std::copy(searched[k]->descriptor.begin(), searched[k]->descriptor.end(),
-                own_descriptors.ptr<std::uint8_t>(static_cast<int>(k - indexed)));
-    }
-    cv::BFMatcher matcher(cv::NORM_HAMMING);
-    std::vector<std::vector<cv::DMatch>> knn;
-    matcher.knnMatch(current.features.descriptors, own_descriptors, knn, 2);
-    for (const auto& pair : knn) {
-      for (const cv::DMatch& match : pair) {
-        nearest[static_cast<size_t>(match.queryIdx)].Offer(static_cast<int>(indexed) + match.trainIdx,
-                                                            static_cast<int>(match.distance));
-      }
-    }
-  }
   std::vector<cv::Point3f> object_points;
   std::vector<cv::Point2f> image_points;
   std::vector<std::pair<int, MapPoint*>> matched;
@@ -311,6 +322,7 @@ bool Tracker::Impl::Relocalize(bool long_term_only) {
     if (found.best < 0 || found.best_distance > 64) continue;
     if (found.best_distance > options.relocalization_ratio * found.second_distance) continue;
     MapPoint* point = searched[static_cast<size_t>(found.best)];
+    if (point->bad) continue;
     const Eigen::Vector3d& p = point->position_w;
     object_points.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()));
     image_points.push_back(current.features.keypoints[i].pt);

@@ -227,6 +227,12 @@ struct Tracker::Impl {
   // relocalization of a localization run.
   std::vector<MapPoint*> long_term_points;
   std::unique_ptr<DescriptorIndex> long_term_index;
+  // The run's own points and their index, rebuilt when the map has gained or purged
+  // points since (OwnPointIndex): a lost run tries every frame on an unchanged map.
+  std::vector<MapPoint*> own_points;
+  std::unique_ptr<DescriptorIndex> own_index;
+  std::uint64_t own_index_upcoming_point_id = 0;
+  size_t own_index_map_size = 0;
   std::deque<InstanceSnapshot> history;
   std::map<std::uint16_t, InstanceMotionMemory> motion_memory;  // per instance id
   std::vector<MapPoint*> recent_points;
@@ -294,6 +300,7 @@ struct Tracker::Impl {
   bool InitializeMap();
   // Against every map point, or with `long_term_only` against the loaded map's.
   bool Relocalize(bool long_term_only);
+  const DescriptorIndex& OwnPointIndex();
   // Off the long-term map: relocalizes on it, and on success drops what was made off it.
   bool RelocalizeOffMap();
   // Localization mode, after the fine pose: counts its inliers on the long-term map into
