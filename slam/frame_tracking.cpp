@@ -259,6 +259,24 @@ bool Tracker::Impl::InitializeMap() {
   return true;
 }
 
+namespace {
+
+// The descriptor index of the map's points that `keep` accepts, which it lists in
+// `points` (row k of the index is points[k]).
+template <typename Keep>
+std::unique_ptr<DescriptorIndex> IndexPoints(const Map& map, Keep keep, std::vector<MapPoint*>* points) {
+  points->clear();
+  cv::Mat descriptors;
+  for (const auto& owned : map.points()) {
+    if (!keep(*owned)) continue;
+    points->push_back(owned.get());
+    descriptors.push_back(cv::Mat(1, kOrbDescriptorBytes, CV_8U, owned->descriptor.data()));
+  }
+  return std::make_unique<DescriptorIndex>(descriptors);
+}
+
+}  // namespace
+
 // The run's own points (not the loaded map's, not bad) and their descriptor index,
 // rebuilt only when points were made or purged since: points never change their
 // descriptor, and one marked bad since is skipped where it is matched.
@@ -268,14 +286,7 @@ const DescriptorIndex& Tracker::Impl::OwnPointIndex() {
   if (own_index != nullptr && own_index_upcoming_point_id == upcoming_point_id && own_index_map_size == map_size) {
     return *own_index;
   }
-  own_points.clear();
-  cv::Mat descriptors;
-  for (const auto& owned : map->points()) {
-    if (owned->bad || owned->fixed) continue;
-    own_points.push_back(owned.get());
-    descriptors.push_back(cv::Mat(1, kOrbDescriptorBytes, CV_8U, owned->descriptor.data()));
-  }
-  own_index = std::make_unique<DescriptorIndex>(descriptors);
+  own_index = IndexPoints(*map, [](const MapPoint& point) { return !point.bad && !point.fixed; }, &own_points);
   own_index_upcoming_point_id = upcoming_point_id;
   own_index_map_size = map_size;
   return *own_index;
@@ -290,13 +301,7 @@ bool Tracker::Impl::Relocalize(bool long_term_only) {
   ClearMatches();
   if (current.features.size() < 20) return false;
   if (localization_mode && long_term_index == nullptr) {
-    cv::Mat descriptors;
-    for (const auto& owned : map->points()) {
-      if (!owned->fixed) continue;
-      long_term_points.push_back(owned.get());
-      descriptors.push_back(cv::Mat(1, kOrbDescriptorBytes, CV_8U, owned->descriptor.data()));
-    }
-    long_term_index = std::make_unique<DescriptorIndex>(descriptors);
+    long_term_index = IndexPoints(*map, [](const MapPoint& point) { return point.fixed; }, &long_term_points);
   }
   // Rows: the long-term points first, then the run's own.
   std::vector<MapPoint*> searched = localization_mode ? long_term_points : std::vector<MapPoint*>();
