@@ -10,8 +10,8 @@
 #
 # Three repeats of the two segmenter-driven modes (plain and the oracle are deterministic
 # and run once), as many runs at a time as there are cores (a run uses about one core),
-# take about 10 minutes on two cores once the build is made (93 s to generate, the
-# eight runs in 8 min); the paper's ten repeats:
+# take about 13 minutes on two cores once the build is made (measured 2026-12-03: 167 s
+# to generate, the eight runs in 651 s); the paper's ten repeats:
 # ./build/segslam scenario run scenarios/city_boulevard.yaml --jobs "$(nproc)"
 # The street-grid route of scenarios/city_two_pass.yaml, where traffic does not mislead
 # plain (README status), runs the same way.
