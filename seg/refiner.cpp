@@ -167,6 +167,7 @@ bool RefinerOptions::IsValid(std::string* error) const {
       repair_max_projected_covered > 1) {
     return fail("repair_max_projected_covered must lie in (0, 1]");
   }
+  if (min_detections_to_add < 1) return fail("min_detections_to_add must be >= 1");
   if (!finite(added_score_decay) || added_score_decay <= 0 || added_score_decay > 1) {
     return fail("added_score_decay must lie in (0, 1]");
   }
@@ -209,8 +210,34 @@ void ResetWorkspace(int width, int height, size_t regions, ProjectionWorkspace* 
 
 bool HasDepth(float z) { return z > 0 && std::isfinite(z); }
 
+// Whether any pixel of the region (inside bbox) has a measured depth.
+bool RegionHasDepth(const cv::Mat& mask, const cv::Rect& bbox, const cv::Mat& depth_m) {
+  for (int v = bbox.y; v < bbox.br().y; ++v) {
+    const std::uint8_t* m = mask.ptr<std::uint8_t>(v);
+    const float* d = depth_m.ptr<float>(v);
+    for (int u = bbox.x; u < bbox.br().x; ++u) {
+      if (m[u] && HasDepth(d[u])) return true;
+    }
+  }
+  return false;
+}
+
+// The largest measured depth of a depth image (the sensor's far limit, near enough),
+// 0 when it measures nothing.
+float FarthestDepth(const cv::Mat& depth_m) {
+  float farthest = 0;
+  for (int v = 0; v < depth_m.rows; ++v) {
+    const float* d = depth_m.ptr<float>(v);
+    for (int u = 0; u < depth_m.cols; ++u) {
+      if (HasDepth(d[u])) farthest = std::max(farthest, d[u]);
+    }
+  }
+  return farthest;
+}
+
 // The depth given to a region's pixels that have none: the median of its measured
-// pixels, or 0 (such pixels are not projected) when none is missing or none measured.
+// pixels; 0 (such pixels are not projected) when none is missing or, for a region
+// measured nowhere, when the fill option is off.
 float MissingDepthFill(const cv::Mat& mask, const cv::Rect& bbox, const cv::Mat& depth_m,
                        std::vector<float>* scratch) {
   scratch->clear();
@@ -289,8 +316,8 @@ void ProjectRegionPixels(const RefinerOptions& options, const PinholeCamera& cam
   }
 }
 
-// Writes the splats into the z-buffer under `id`, nearest first, each over the pixel
-// centres in [u - hx, u + hx) x [v - hy, v + hy). Returns the box of pixels they cover
+// Writes the splats into the z-buffer under `id`, nearest first (ties to the later
+// write), each over the pixel centres in [u - hx, u + hx) x [v - hy, v + hy). Returns the box of pixels they cover
 // (empty when none lands in the image).
 cv::Rect SplatIntoZBuffer(const std::vector<Splat>& splats, std::uint16_t id, cv::Mat* zbuf,
                           cv::Mat* label) {
@@ -310,7 +337,7 @@ cv::Rect SplatIntoZBuffer(const std::vector<Splat>& splats, std::uint16_t id, cv
       float* zr = zbuf->ptr<float>(y);
       std::uint16_t* lr = label->ptr<std::uint16_t>(y);
       for (int x = x0; x <= x1; ++x) {
-        if (p.z < zr[x]) {
+        if (p.z <= zr[x]) {
           zr[x] = p.z;
           lr[x] = id;
         }
@@ -406,18 +433,35 @@ void ProjectInto(const RefinerOptions& options, const PinholeCamera& camera,
   if (n == 0) return;
 
   const PixelRays rays(camera);
+  std::optional<float> far_limit;  // FarthestDepth(previous_depth_m), when first needed
   cv::Rect all_touched;
-  for (size_t i = 0; i < n; ++i) {
+  // Where regions overlap (a segmenter's table mask that takes in the keyboard on it),
+  // a shared pixel projects to the same place at the same depth for both. Splatting the
+  // larger regions first and letting ties go to the later one gives it to the smaller,
+  // more specific region; first-come ties erased such a keyboard from the projection.
+  std::vector<RegionStats> source_stats(n);
+  for (size_t i = 0; i < n; ++i) source_stats[i] = Measure(previous_refined.instances[i].mask);
+  std::vector<size_t> larger_first(n);
+  std::iota(larger_first.begin(), larger_first.end(), size_t{0});
+  std::stable_sort(larger_first.begin(), larger_first.end(), [&](size_t a, size_t b) {
+    return source_stats[a].area_px > source_stats[b].area_px;
+  });
+  for (const size_t i : larger_first) {
     const InstanceMask& instance = previous_refined.instances[i];
-    const RegionStats stats = Measure(instance.mask);
+    const RegionStats& stats = source_stats[i];
     if (stats.area_px == 0) continue;
     const auto motion = instance_motion_prev.find(instance.track_id);
     const Eigen::Isometry3d& T =
         motion != instance_motion_prev.end() ? motion->second : T_cur_prev;
-    const float fill_depth =
+    float fill_depth =
         options.fill_missing_depth_with_median
             ? MissingDepthFill(instance.mask, stats.bbox, previous_depth_m, &ws->depths)
             : 0.0f;
+    if (fill_depth <= 0 && options.project_depthless_regions_at_far_limit &&
+        !RegionHasDepth(instance.mask, stats.bbox, previous_depth_m)) {
+      if (!far_limit) far_limit = FarthestDepth(previous_depth_m);
+      fill_depth = *far_limit;
+    }
     ProjectRegionPixels(options, camera, rays, instance.mask, stats.bbox, previous_depth_m,
                         fill_depth, T, &ws->splats);
     ws->touched[i] =
@@ -680,10 +724,14 @@ namespace {
 // more regions than the current one.
 void AddBackUnmatchedProjections(const RefinerOptions& options, const FrameSegmentation& previous,
                                  const std::vector<bool>& previous_matched, bool count_rule_holds,
+                                 const std::map<std::uint16_t, int>& detections_of_track,
                                  const ProjectionWorkspace& ws, RefinementResult* result) {
   for (size_t p = 0; p < previous.instances.size(); ++p) {
     if (previous_matched[p]) continue;
     const InstanceMask& prev = previous.instances[p];
+    const auto detections = detections_of_track.find(prev.track_id);
+    const bool confirmed = detections == detections_of_track.end() ||
+                           detections->second >= options.min_detections_to_add;
     RegionDecision d;
     d.previous_index = static_cast<int>(p);
     d.track_id = prev.track_id;
@@ -691,7 +739,8 @@ void AddBackUnmatchedProjections(const RefinerOptions& options, const FrameSegme
     const float score = static_cast<float>(prev.score * options.added_score_decay);
     const bool rule = options.add_unmatched == AddUnmatchedRule::kAlways ||
                       (options.add_unmatched == AddUnmatchedRule::kPaperCountRule && count_rule_holds);
-    const bool add = rule && ws.regions[p].area_px >= std::max(1, options.min_projected_area_px) &&
+    const bool add = rule && confirmed &&
+                     ws.regions[p].area_px >= std::max(1, options.min_projected_area_px) &&
                      score >= options.min_added_score;
     d.kind = add ? RegionDecision::Kind::kAdded : RegionDecision::Kind::kDropped;
     if (add) {
@@ -714,6 +763,24 @@ void SegmentationRefiner::ReserveIdsOf(const FrameSegmentation& previous) {
       next_track_id_ = static_cast<std::uint16_t>(p.track_id + 1);
     }
   }
+}
+
+void SegmentationRefiner::CountDetections(const RefinementResult& result) {
+  std::map<std::uint16_t, int> counts;
+  for (const RegionDecision& d : result.decisions) {
+    if (d.kind == RegionDecision::Kind::kDropped) continue;
+    const auto before = detections_of_track_.find(d.track_id);
+    // A carried track that this refiner did not make has an unknown past: confirmed.
+    const int past = before != detections_of_track_.end() ? before->second : options_.min_detections_to_add;
+    if (d.kind == RegionDecision::Kind::kNew) {
+      counts[d.track_id] = 1;
+    } else if (d.kind == RegionDecision::Kind::kAdded) {
+      counts[d.track_id] = past;
+    } else {
+      counts[d.track_id] = past + 1;
+    }
+  }
+  detections_of_track_ = std::move(counts);
 }
 
 RefinementResult SegmentationRefiner::AllNew(const FrameSegmentation& current) {
@@ -742,7 +809,11 @@ RefinementResult SegmentationRefiner::Refine(const RefinerInput& in) {
   // Ids handed out elsewhere (a loaded previous segmentation) are never reused.
   if (in.previous_refined) ReserveIdsOf(*in.previous_refined);
   // First frame (or no depth to project with): every region is new.
-  if (!in.previous_refined || in.previous_depth_m.empty()) return AllNew(current);
+  if (!in.previous_refined || in.previous_depth_m.empty()) {
+    RefinementResult result = AllNew(current);
+    CountDetections(result);
+    return result;
+  }
 
   const FrameSegmentation& previous = *in.previous_refined;
   const Eigen::Isometry3d T_cur_prev = in.T_wc_current_coarse.inverse() * in.T_wc_previous_fine;
@@ -786,8 +857,9 @@ RefinementResult SegmentationRefiner::Refine(const RefinerInput& in) {
     result.refined.instances.push_back(std::move(instance));
   }
 
-  AddBackUnmatchedProjections(options_, previous, previous_matched, previous.instances.size() > n_cur, ws,
-                              &result);
+  AddBackUnmatchedProjections(options_, previous, previous_matched, previous.instances.size() > n_cur,
+                              detections_of_track_, ws, &result);
+  CountDetections(result);
   return result;
 }
 

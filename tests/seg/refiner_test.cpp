@@ -211,6 +211,59 @@ TEST(ProjectRegionsTest, MissingDepthIsFilledFromTheMedianOrSkipped) {
             100 * 80 - 30 * 30);
 }
 
+// A segmenter's table mask that takes in the keyboard on it: the shared pixels have one
+// depth, so the z-buffer cannot order them; the keyboard must keep its projection
+// whichever region comes first (first-come ties erased it).
+TEST(ProjectRegionsTest, OverlappingRegionsLeaveTheSharedPixelsToTheSmaller) {
+  const PinholeCamera camera = TestCamera();
+  const cv::Rect table(100, 200, 400, 200), keyboard(250, 250, 80, 30);
+  const cv::Mat depth(480, 640, CV_32F, cv::Scalar(2.0));
+  const Eigen::Isometry3d T = Translation(0.1, 0, 0);  // 25 px at 2 m
+  const cv::Point shift(25, 0);
+  for (int order = 0; order < 2; ++order) {
+    SCOPED_TRACE(order);
+    FrameSegmentation previous;
+    previous.instances.push_back(Instance(1, 67, RectMask(table)));
+    previous.instances.push_back(Instance(2, 76, RectMask(keyboard)));
+    if (order == 1) std::swap(previous.instances[0], previous.instances[1]);
+    const std::vector<ProjectedRegion> projected =
+        ProjectRegions(RefinerOptions(), camera, previous, depth, T);
+    const cv::Mat& table_projection = projected[order == 0 ? 0 : 1].mask;
+    const cv::Mat& keyboard_projection = projected[order == 0 ? 1 : 0].mask;
+    EXPECT_EQ(Differences(keyboard_projection, RectMask(keyboard + shift)), 0);
+    cv::Mat expected_table = RectMask(table + shift);
+    expected_table.setTo(0, RectMask(keyboard + shift));
+    EXPECT_EQ(Differences(table_projection, expected_table), 0);
+  }
+}
+
+// A region with no depth at all lies beyond the sensor's far limit: it is projected at
+// the farthest depth measured in the previous frame, where translation moves it little
+// and rotation moves it exactly; with the option off it is not projected.
+TEST(ProjectRegionsTest, RegionWithoutDepthIsProjectedAtTheFarLimit) {
+  const PinholeCamera camera = TestCamera();
+  const cv::Rect far_car(300, 200, 20, 10);
+  cv::Mat depth(480, 640, CV_32F, cv::Scalar(10.0));
+  depth(cv::Rect(0, 0, 640, 100)).setTo(40.0);  // the far limit: road far ahead
+  depth(far_car).setTo(0);
+  FrameSegmentation previous;
+  previous.instances.push_back(Instance(1, 3, RectMask(far_car)));
+  // The translation moves a point at 40 m by 0.4 / 40 * fx = 5 px to the right, the
+  // 2 degree pan about y by about fx * tan(2 deg) = 17.5 px to the left at any depth.
+  Eigen::Isometry3d T = Translation(0.4, 0, 0);
+  T.linear() = Eigen::AngleAxisd(-2.0 * M_PI / 180.0, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  RefinerOptions options;
+  const std::vector<ProjectedRegion> projected = ProjectRegions(options, camera, previous, depth, T);
+  const cv::Mat expected = ExpectedProjection(camera, far_car, 40.0, T);
+  ASSERT_GT(cv::countNonZero(expected), 150);
+  EXPECT_EQ(DifferencesOutsideBorderBand(projected[0].mask, expected), 0);
+  const cv::Rect expected_box = cv::boundingRect(expected);
+  EXPECT_LE(std::abs(projected[0].bbox.x - expected_box.x), 1);
+  EXPECT_NEAR(expected_box.x - far_car.x, 5 - 17.5, 1.5);
+  options.project_depthless_regions_at_far_limit = false;
+  EXPECT_EQ(ProjectRegions(options, camera, previous, depth, T)[0].area_px, 0);
+}
+
 // Scene for the refiner tests: three previous regions at 2 m, identity camera motion.
 struct Scene {
   PinholeCamera camera = TestCamera();
@@ -314,6 +367,55 @@ TEST(SegmentationRefinerTest, RegionsFollowTheCameraMotionBetweenThePoses) {
 
 // A new region scoring under min_new_region_score is dropped without a track id, so a
 // long run of weak detections cannot use the 65534 ids up.
+// Only a track the segmenter detected in two frames is carried on when it is missed: a
+// detection seen once (most likely a false positive) leaves no ghost behind.
+TEST(SegmentationRefinerTest, OnlyConfirmedTracksAreAddedBackWhenMissed) {
+  const PinholeCamera camera = TestCamera();
+  const cv::Mat depth(480, 640, CV_32F, cv::Scalar(2.0));
+  const cv::Rect person(100, 100, 60, 150), bag(400, 300, 50, 40);
+  auto frame = [&](bool with_person, bool with_bag) {
+    FrameSegmentation s;
+    if (with_person) s.instances.push_back(Instance(0, 1, RectMask(person), 0.9f));
+    if (with_bag) s.instances.push_back(Instance(0, 27, RectMask(bag), 0.5f));
+    return s;
+  };
+  SegmentationRefiner refiner;
+  RefinerInput in;
+  in.camera = camera;
+  in.current_initial = frame(true, false);
+  FrameSegmentation previous = refiner.Refine(in).refined;  // frame 0: the person
+  in.previous_refined = &previous;
+  in.previous_depth_m = depth;
+  in.current_initial = frame(true, true);  // frame 1: the person again, a bag once
+  previous = refiner.Refine(in).refined;
+  ASSERT_EQ(previous.instances.size(), 2u);
+  const std::uint16_t person_id = previous.instances[0].track_id;
+  in.current_initial = frame(false, false);  // frame 2: the segmenter misses both
+  const RefinementResult missed = refiner.Refine(in);
+  SCOPED_TRACE(missed.BriefReport());
+  ASSERT_EQ(missed.refined.instances.size(), 1u);
+  EXPECT_EQ(missed.refined.instances[0].track_id, person_id);
+  EXPECT_EQ(Differences(missed.refined.instances[0].mask, RectMask(person)), 0);
+  ASSERT_EQ(missed.decisions.size(), 2u);
+  EXPECT_EQ(missed.decisions[0].kind, RegionDecision::Kind::kAdded);
+  EXPECT_EQ(missed.decisions[1].kind, RegionDecision::Kind::kDropped);
+
+  // With every track confirmed from its first detection, the bag's ghost is added too.
+  RefinerOptions any_track;
+  any_track.min_detections_to_add = 1;
+  SegmentationRefiner eager(any_track);
+  in.previous_refined = nullptr;
+  in.previous_depth_m = cv::Mat();
+  in.current_initial = frame(true, false);
+  previous = eager.Refine(in).refined;
+  in.previous_refined = &previous;
+  in.previous_depth_m = depth;
+  in.current_initial = frame(true, true);
+  previous = eager.Refine(in).refined;
+  in.current_initial = frame(false, false);
+  EXPECT_EQ(eager.Refine(in).refined.instances.size(), 2u);
+}
+
 TEST(SegmentationRefinerTest, DroppedNewRegionsTakeNoTrackId) {
   const Scene scene;
   FrameSegmentation current;
@@ -562,6 +664,9 @@ TEST(RefinerOptionsTest, IsValidReportsEachError) {
   o = {};
   o.min_added_score = 2;
   expect_invalid(o, "min_added_score");
+  o = {};
+  o.min_detections_to_add = 0;
+  expect_invalid(o, "min_detections_to_add");
   RefinerOptions bad;
   bad.max_match_cost = -1;
   EXPECT_THROW(SegmentationRefiner{bad}, Error);
