@@ -108,11 +108,12 @@ struct RefinerOptions {
   // px = 8x8, when any projection was added): far objects are 2-60 px, and once only
   // confirmed tracks are added (min_detections_to_add) a small projection is as good
   // evidence of a missed instance as a large one. seg-eval with true poses, boulevard
-  // refined mAP pass 1 / 2: 64 px 68.2 / 67.0, 4 px 69.5 / 68.7, 1 px 69.6 / 68.7.
+  // refined mAP pass 1 / 2: 64 px 68.2 / 67.0, 4 px 69.5 / 68.7, 1 px 69.6 / 68.7
+  // (measured before the overlap rule of ProjectRegions).
   int min_projected_area_px = 1;
-  // Projected regions smaller than this (pixels, >= 0) are not matched. 1 (was the 64 px
-  // above): far objects (traffic lights, pedestrians down the street in the city) are
-  // 2-60 px; left unmatched they became "new" every frame and lost their track.
+  // Projected regions smaller than this (pixels, >= 0) are not matched. 1 (was 64 px):
+  // far objects (traffic lights, pedestrians down the street in the city) are 2-60 px;
+  // left unmatched they became "new" every frame and lost their track.
   int min_matched_area_px = 1;
 
   // --- Decisions (Algorithm 1).
