@@ -140,6 +140,7 @@ bool RefinerOptions::IsValid(std::string* error) const {
   }
   if (!finite(min_depth_m) || min_depth_m <= 0) return fail("min_depth_m must be > 0");
   if (min_projected_area_px < 0) return fail("min_projected_area_px must be >= 0");
+  if (min_far_projected_area_px < 0) return fail("min_far_projected_area_px must be >= 0");
   if (!finite(replace_min_ratio_gap) || replace_min_ratio_gap < 0 ||
       replace_min_ratio_gap >= 1) {
     return fail("replace_min_ratio_gap must lie in [0, 1)");
@@ -185,6 +186,8 @@ struct ProjectionWorkspace {
   cv::Rect dirty;
   std::vector<RegionStats> regions;  // per previous region: box, area, barycentre
   std::vector<cv::Rect> touched;
+  // Per previous region: projected at the far limit (it had no depth at all).
+  std::vector<bool> at_far_limit;
   std::vector<Splat> splats;
   std::vector<float> depths;
 };
@@ -206,6 +209,7 @@ void ResetWorkspace(int width, int height, size_t regions, ProjectionWorkspace* 
   ws->dirty = cv::Rect();
   ws->regions.assign(regions, RegionStats());
   ws->touched.assign(regions, cv::Rect());
+  ws->at_far_limit.assign(regions, false);
 }
 
 bool HasDepth(float z) { return z > 0 && std::isfinite(z); }
@@ -461,6 +465,7 @@ void ProjectInto(const RefinerOptions& options, const PinholeCamera& camera,
         !RegionHasDepth(instance.mask, stats.bbox, previous_depth_m)) {
       if (!far_limit) far_limit = FarthestDepth(previous_depth_m);
       fill_depth = *far_limit;
+      ws->at_far_limit[i] = true;
     }
     ProjectRegionPixels(options, camera, rays, instance.mask, stats.bbox, previous_depth_m,
                         fill_depth, T, &ws->splats);
@@ -739,8 +744,8 @@ void AddBackUnmatchedProjections(const RefinerOptions& options, const FrameSegme
     const float score = static_cast<float>(prev.score * options.added_score_decay);
     const bool rule = options.add_unmatched == AddUnmatchedRule::kAlways ||
                       (options.add_unmatched == AddUnmatchedRule::kPaperCountRule && count_rule_holds);
-    const bool add = rule && confirmed &&
-                     ws.regions[p].area_px >= std::max(1, options.min_projected_area_px) &&
+    const int min_area = ws.at_far_limit[p] ? options.min_far_projected_area_px : options.min_projected_area_px;
+    const bool add = rule && confirmed && ws.regions[p].area_px >= std::max(1, min_area) &&
                      score >= options.min_added_score;
     d.kind = add ? RegionDecision::Kind::kAdded : RegionDecision::Kind::kDropped;
     if (add) {

@@ -39,6 +39,7 @@ const NamedOptionTable<RefinerOptions>& Table() {
       SEGSLAM_REAL(occlusion_tolerance),
       SEGSLAM_REAL(min_depth_m),
       SEGSLAM_INT(min_projected_area_px),
+      SEGSLAM_INT(min_far_projected_area_px),
       SEGSLAM_INT(min_matched_area_px),
       SEGSLAM_REAL(replace_min_ratio_gap),
       SEGSLAM_INT(boundary_tolerance_px),

@@ -653,6 +653,9 @@ TEST(RefinerOptionsTest, IsValidReportsEachError) {
   o.min_projected_area_px = -1;
   expect_invalid(o, "min_projected_area_px");
   o = {};
+  o.min_far_projected_area_px = -1;
+  expect_invalid(o, "min_far_projected_area_px");
+  o = {};
   o.repair_min_current_inside = 1.5;
   expect_invalid(o, "repair_min_current_inside");
   o = {};
