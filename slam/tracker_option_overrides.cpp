@@ -24,6 +24,8 @@ const NamedOptionTable<TrackerOptions>& Table() {
       SEGSLAM_INT(orb.initial_fast_threshold),
       SEGSLAM_INT(orb.min_fast_threshold),
       SEGSLAM_INT(orb.cell_size_px),
+      SEGSLAM_REAL(orb.min_depth_m),
+      SEGSLAM_REAL(orb.max_depth_m),
       SEGSLAM_REAL(depth_sigma_at_1m),
       SEGSLAM_REAL(max_point_depth_m),
       SEGSLAM_INT(max_descriptor_distance),

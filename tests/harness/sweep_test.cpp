@@ -379,12 +379,13 @@ TEST_F(SweepCliTest, SuiteJoinsItsEntriesIntoThePapersTables) {
   const fs::path suite = dir_ / "tiny_suite.yaml";
   std::ofstream(suite) << "name: tiny\nentries:\n"
                        << "  - {name: office_a, scenario: " << kSmallOffice << ", tables: [ate, segmentation]}\n"
-                       << "  - {name: office_b, scenario: " << kSmallOffice << ", set: [seed=9], tables: [relocalization]}\n";
+                       << "  - {name: office_b, scenario: " << kSmallOffice << ", set: [seed=9], tables: [relocalization]}\n"
+                       << "  - {name: office_c, scenario: " << kSmallOffice << ", set: [seed=10], tables: [relocalization]}\n";
   const CommandOutput result = Run("scenario suite " + suite.string() + " --frames 10 --repeats 1 --modes plain,mutual -q" +
                                    " --cache " + (dir_ / "cache").string() + " --out " + (dir_ / "out").string());
   ASSERT_EQ(result.exit_code, 0) << result.stdout_text << result.stderr_text;
   for (const char* file : {"report.md", "report.html", "suite_results.json", "office_a/results.json",
-                           "office_b/results.json"}) {
+                           "office_b/results.json", "office_c/results.json"}) {
     EXPECT_TRUE(fs::exists(dir_ / "out" / file)) << file;
   }
   const std::string markdown = ReadText(dir_ / "out" / "report.md");
@@ -394,8 +395,24 @@ TEST_F(SweepCliTest, SuiteJoinsItsEntriesIntoThePapersTables) {
   EXPECT_NE(result.stdout_text.find("office_a pass1 |"), std::string::npos) << result.stdout_text;
   EXPECT_EQ(result.stdout_text.find("office_b pass1 |"), std::string::npos) << result.stdout_text;
   const nlohmann::json joined = nlohmann::json::parse(ReadText(dir_ / "out" / "suite_results.json"));
-  ASSERT_EQ(joined["entries"].size(), 2u);
+  ASSERT_EQ(joined["entries"].size(), 3u);
   EXPECT_EQ(joined["entries"][1]["overrides"], nlohmann::json::array({"seed=9"}));
+  // Table III also over all routes, as the paper gives it: each mode's per-route medians
+  // of pass 2's ATE, here two routes, so their mean, min and max.
+  EXPECT_NE(result.stdout_text.find("all 2 routes: median [min, max] |"), std::string::npos) << result.stdout_text;
+  for (const std::string mode : {"plain", "mutual"}) {
+    std::vector<double> route_ate;
+    for (const char* entry : {"office_b", "office_c"}) {
+      const nlohmann::json route = nlohmann::json::parse(ReadText(dir_ / "out" / entry / "results.json"));
+      route_ate.push_back(route["summary"]["pass2"][mode]["ate_rmse_m"]["median"].get<double>());
+    }
+    const nlohmann::json& over_routes = joined["relocalization_over_routes"][mode]["ate_rmse_m"];
+    ASSERT_TRUE(over_routes.is_object()) << joined.dump(2);
+    EXPECT_EQ(over_routes["routes"], 2) << mode;
+    EXPECT_NEAR(over_routes["median"].get<double>(), (route_ate[0] + route_ate[1]) / 2, 1e-12) << mode;
+    EXPECT_EQ(over_routes["min"].get<double>(), std::min(route_ate[0], route_ate[1])) << mode;
+    EXPECT_EQ(over_routes["max"].get<double>(), std::max(route_ate[0], route_ate[1])) << mode;
+  }
 
   const fs::path bad = dir_ / "bad_suite.yaml";
   std::ofstream(bad) << "name: bad\nentries:\n"

@@ -17,11 +17,13 @@ TEST(TrackerOptionOverridesTest, SetsRealIntegerBooleanAndNestedFields) {
   SetTrackerOption(&options, "local_bundle_adjustment=0");
   SetTrackerOption(&options, "orb.max_features=1500");
   SetTrackerOption(&options, "moving_distance_per_m=0.025");
+  SetTrackerOption(&options, "orb.max_depth_m=60");
   EXPECT_DOUBLE_EQ(options.last_frame_radius_px, 15);
   EXPECT_EQ(options.min_tracking_inliers, 40);
   EXPECT_FALSE(options.local_bundle_adjustment);
   EXPECT_EQ(options.orb.max_features, 1500);
   EXPECT_DOUBLE_EQ(options.moving_distance_per_m, 0.025);
+  EXPECT_FLOAT_EQ(options.orb.max_depth_m, 60.0f);
   // Untouched fields keep their defaults.
   EXPECT_DOUBLE_EQ(options.local_map_radius_px, TrackerOptions().local_map_radius_px);
 }
