@@ -177,8 +177,9 @@ struct SuiteTables {
   ReportTable ate;
   ReportTable segmentation;
   ReportTable relocalization;
-  // Table III over all routes, per mode: {"routes", "ate_rmse_m" and "localized_share",
-  // each {"median", "min", "max"}}; null with fewer than two routes.
+  // Table III over all routes: {mode: {"ate_rmse_m": S, "localized_share": S}}, each S
+  // {"median", "min", "max", "routes"} over the routes' medians (null where no route has
+  // a value); null with fewer than two routes.
   nlohmann::json relocalization_over_routes;
 };
 
