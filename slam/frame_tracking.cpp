@@ -293,7 +293,9 @@ const DescriptorIndex& Tracker::Impl::OwnPointIndex() {
 }
 
 // Relocalization against every map point: nearest-neighbour descriptor search with a
-// ratio test, RANSAC PnP, pose optimisation, then a local-map search. The search goes
+// ratio test, RANSAC PnP (up to two rival poses), pose optimisation, then a local-map
+// search. Two poses that both hold up on the local map leave the frame lost: it says
+// nothing certain of where it is (TrackerOptions::rival_support_ratio). The search goes
 // through descriptor indexes (by brute force a relocalization on city_boulevard's map
 // took 0.6 s, and a lost run pays it every frame): the loaded map's, built once, and
 // the run's own points', rebuilt when they changed.
@@ -334,20 +336,85 @@ bool Tracker::Impl::Relocalize(bool long_term_only) {
     matched.emplace_back(static_cast<int>(i), point);
   }
   if (matched.size() < 15) return false;
-  cv::Mat rvec, tvec;
-  std::vector<int> inliers;
-  const bool solved = cv::solvePnPRansac(object_points, image_points, cv::Mat(camera.KCv()), cv::noArray(), rvec, tvec,
-                                         false, 300, 4.0f, 0.99, inliers, cv::SOLVEPNP_EPNP);
-  if (!solved || inliers.size() < 15) return false;
-  current.T_cw = PoseFromRvecTvec(rvec, tvec);
-  for (int k : inliers) {
+  const std::vector<RelocalizationHypothesis> hypotheses = RivalPoses(matched, object_points, image_points);
+  if (hypotheses.empty()) return false;
+  if (hypotheses.size() == 2) {
+    const int support_first = TrackFromHypothesis(hypotheses[0], matched);
+    const Eigen::Vector3d center_first = current.T_cw.inverse().translation();
+    const int support_second = TrackFromHypothesis(hypotheses[1], matched);
+    const Eigen::Vector3d center_second = current.T_cw.inverse().translation();
+    const bool apart = (center_first - center_second).norm() > options.rival_pose_distance_m;
+    if (apart && std::min(support_first, support_second) >=
+                     options.rival_support_ratio * std::max(support_first, support_second)) {
+      ClearMatches();
+      return false;
+    }
+    // The second is the frame's state now; the first is tracked again if it won.
+    if (support_first >= support_second) TrackFromHypothesis(hypotheses[0], matched);
+  } else {
+    TrackFromHypothesis(hypotheses[0], matched);
+  }
+  return result.num_coarse_inliers >= options.min_relocalization_inliers;
+}
+
+// RANSAC PnP on the relocalization's matches, then again on the matches its consensus
+// left out: a street of repeated façades matches two places at once, and the larger
+// consensus may be the wrong one. The second pose is kept when at least
+// min_rival_consensus matches agree on it.
+std::vector<Tracker::Impl::RelocalizationHypothesis> Tracker::Impl::RivalPoses(
+    const std::vector<std::pair<int, MapPoint*>>& matched, const std::vector<cv::Point3f>& object_points,
+    const std::vector<cv::Point2f>& image_points) const {
+  std::vector<RelocalizationHypothesis> hypotheses;
+  std::vector<bool> taken(matched.size(), false);
+  for (size_t round = 0; round < 2; ++round) {
+    const size_t min_consensus = round == 0 ? 15 : static_cast<size_t>(options.min_rival_consensus);
+    std::vector<cv::Point3f> round_object_points;
+    std::vector<cv::Point2f> round_image_points;
+    std::vector<int> round_matches;
+    for (size_t k = 0; k < matched.size(); ++k) {
+      if (taken[k]) continue;
+      round_object_points.push_back(object_points[k]);
+      round_image_points.push_back(image_points[k]);
+      round_matches.push_back(static_cast<int>(k));
+    }
+    if (round_matches.size() < min_consensus) break;
+    cv::Mat rvec, tvec;
+    std::vector<int> inliers;
+    const bool solved = cv::solvePnPRansac(round_object_points, round_image_points, cv::Mat(camera.KCv()),
+                                           cv::noArray(), rvec, tvec, false, 300, 4.0f, 0.99, inliers,
+                                           cv::SOLVEPNP_EPNP);
+    if (!solved || inliers.size() < min_consensus) break;
+    RelocalizationHypothesis hypothesis;
+    hypothesis.T_cw = PoseFromRvecTvec(rvec, tvec);
+    for (int k : inliers) {
+      const int match = round_matches[static_cast<size_t>(k)];
+      taken[static_cast<size_t>(match)] = true;
+      hypothesis.matches.push_back(match);
+    }
+    hypotheses.push_back(std::move(hypothesis));
+  }
+  return hypotheses;
+}
+
+// Tracks the current frame from a relocalization pose and its consensus: pose
+// optimisation, then a search of the local map. Leaves current.T_cw, the matches and
+// result.num_coarse_inliers as they come out, and returns the local-map inliers (0 when
+// the consensus does not survive the optimisation). The map points a losing pose looked
+// at keep that look in their visible count; it happens only on relocalization frames.
+int Tracker::Impl::TrackFromHypothesis(const RelocalizationHypothesis& hypothesis,
+                                       const std::vector<std::pair<int, MapPoint*>>& matched) {
+  ClearMatches();
+  current.T_cw = hypothesis.T_cw;
+  for (int k : hypothesis.matches) {
     const auto& [feature, point] = matched[static_cast<size_t>(k)];
     if (point->last_matched_frame == current.index) continue;
     current.points[static_cast<size_t>(feature)] = point;
     point->last_matched_frame = current.index;
   }
-  if (OptimizeCurrentPose(false, true) < 10) return false;
-  return TrackLocalMap(options.min_relocalization_inliers, 5.0);
+  result.num_coarse_inliers = 0;
+  if (OptimizeCurrentPose(false, true) < 10) return 0;
+  TrackLocalMap(options.min_relocalization_inliers, 5.0);
+  return result.num_coarse_inliers;
 }
 
 // ORB-SLAM2's localization mode: a frame tracked only on the points the run made itself

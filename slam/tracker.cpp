@@ -116,6 +116,11 @@ void CheckTrackerOptions(const TrackerOptions& options) {
   require(options.local_map_radius_px > 0, "local_map_radius_px", options.local_map_radius_px, "must be positive");
   require(options.motion_baseline_s >= 0, "motion_baseline_s", options.motion_baseline_s, "must be >= 0");
   require(options.min_long_term_inliers >= 1, "min_long_term_inliers", options.min_long_term_inliers, "must be >= 1");
+  require(options.min_rival_consensus >= 4, "min_rival_consensus", options.min_rival_consensus,
+          "must be >= 4 (a PnP pose needs four points)");
+  require(options.rival_pose_distance_m >= 0, "rival_pose_distance_m", options.rival_pose_distance_m, "must be >= 0");
+  require(options.rival_support_ratio > 0, "rival_support_ratio", options.rival_support_ratio,
+          "must be positive (above 1: never refuse a relocalization for a rival)");
   require(options.off_map_relocalization_interval_s >= 0, "off_map_relocalization_interval_s",
           options.off_map_relocalization_interval_s, "must be >= 0");
 }

@@ -172,6 +172,17 @@ struct TrackerOptions {
   // relocalization, as ORB-SLAM, so a wrong relocalization does not stick).
   int min_tracking_inliers = 30;
   int min_relocalization_inliers = 50;
+  // A relocalization also solves for a rival pose on the matches the first pose's
+  // consensus left out (at least min_rival_consensus of them agreeing), and tracks both
+  // on the local map. When they lie more than rival_pose_distance_m apart and the weaker
+  // has at least rival_support_ratio of the stronger's local-map inliers, the frame stays
+  // lost: on a boulevard of repeated façades pass 2 otherwise relocalized 124 m down the
+  // street (98 local-map inliers there, 48 where it was) and stayed there for eleven
+  // frames, until the off-map relocalization put it back; a right pose with a rival of
+  // 0.56 of its support is lost for one frame (README, "Run SLAM").
+  int min_rival_consensus = 10;
+  double rival_pose_distance_m = 2.0;
+  double rival_support_ratio = 0.4;
   // Localization mode: a frame with fewer fine-pose inliers on the long-term map's points
   // than this is off the map (ORB-SLAM2's localization mode counts 10), tracked only on
   // the points it made itself, which drift or may sit in the frame of a wrong

@@ -298,8 +298,17 @@ struct Tracker::Impl {
   bool TrackReferenceKeyframe();
   bool TrackLocalMap(int min_inliers, double radius_factor);
   bool InitializeMap();
+  struct RelocalizationHypothesis {
+    Eigen::Isometry3d T_cw;
+    std::vector<int> matches;  // RANSAC's consensus: rows of Relocalize()'s match list
+  };
   // Against every map point, or with `long_term_only` against the loaded map's.
   bool Relocalize(bool long_term_only);
+  std::vector<RelocalizationHypothesis> RivalPoses(const std::vector<std::pair<int, MapPoint*>>& matched,
+                                                   const std::vector<cv::Point3f>& object_points,
+                                                   const std::vector<cv::Point2f>& image_points) const;
+  int TrackFromHypothesis(const RelocalizationHypothesis& hypothesis,
+                          const std::vector<std::pair<int, MapPoint*>>& matched);
   const DescriptorIndex& OwnPointIndex();
   // Off the long-term map: relocalizes on it, and on success drops what was made off it.
   bool RelocalizeOffMap();

@@ -564,6 +564,40 @@ Eigen::Isometry3d PanToSideWallPose(int frame) {
   return testing::LookingAlongX(Eigen::Vector3d(1.0, 0.0, 1.5), turned * M_PI / 2);
 }
 
+// Two look-alike places in one long-term map: every other point of the room's map is
+// moved 2.5 m to the side, so that each feature of the second visit finds its one map
+// twin either where it is or 2.5 m away, half of them each way, and two poses explain
+// the frame equally well (a boulevard's repeated façades, at their worst). Relocalizing
+// there is a coin flip; the tracker stays lost instead.
+TEST(TrackerTest, RelocalizationBetweenTwoLookAlikePlacesStaysLost) {
+  const PinholeCamera camera = TestCamera();
+  const auto room = RoomQuads(4);
+  LongTermMapData map = MapOfFirstVisit(camera, room, /*include_instances=*/true);
+  const Eigen::Vector3d look_alike_offset(0.0, 2.5, 0.0);
+  for (size_t k = 1; k < map.points.size(); k += 2) map.points[k].position_w += look_alike_offset;
+
+  auto second_visit = [&](double rival_support_ratio) {
+    TrackerOptions options;
+    options.rival_support_ratio = rival_support_ratio;
+    Tracker localizer(camera, options);
+    localizer.LoadLongTermMap(map, "look-alike map");
+    std::vector<FrameResult> frames;
+    for (int i = 0; i < 10; ++i) {
+      frames.push_back(localizer.Track(RenderQuads(room, camera, HandHeldPathPose(i), i, i / 30.0).frame, nullptr,
+                                       SlamMode::kPlain));
+    }
+    return frames;
+  };
+  for (const FrameResult& frame : second_visit(TrackerOptions().rival_support_ratio)) {
+    EXPECT_FALSE(frame.localized()) << "frame " << frame.frame_index;
+  }
+  // Without the rival's check the first frame is placed at one of the two places.
+  const std::vector<FrameResult> unchecked = second_visit(/*never refuse:*/ 2.0);
+  ASSERT_TRUE(unchecked[0].localized());
+  const double error_m = PositionError(unchecked[0].T_wc, HandHeldPathPose(0));
+  EXPECT_TRUE(error_m < 0.05 || std::abs(error_m - look_alike_offset.norm()) < 0.05) << error_m;
+}
+
 // The look-alike trap of a long-term map (repeated facades along a boulevard): the map's
 // copy of the back wall lies 0.78 m from where the wall is, so the second visit, which
 // starts facing that wall, relocalizes 0.78 m off and tracks there, on the map. Once it
