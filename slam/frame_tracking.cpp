@@ -339,18 +339,19 @@ bool Tracker::Impl::Relocalize(bool long_term_only) {
   const std::vector<RelocalizationHypothesis> hypotheses = RivalPoses(matched, object_points, image_points);
   if (hypotheses.empty()) return false;
   if (hypotheses.size() == 2) {
-    const int support_first = TrackFromHypothesis(hypotheses[0], matched);
-    const Eigen::Vector3d center_first = current.T_cw.inverse().translation();
+    // The rival first, so that the frame is left in the first pose's state, which wins
+    // far more often; the rival is tracked again only when it wins.
     const int support_second = TrackFromHypothesis(hypotheses[1], matched);
     const Eigen::Vector3d center_second = current.T_cw.inverse().translation();
+    const int support_first = TrackFromHypothesis(hypotheses[0], matched);
+    const Eigen::Vector3d center_first = current.T_cw.inverse().translation();
     const bool apart = (center_first - center_second).norm() > options.rival_pose_distance_m;
     if (apart && std::min(support_first, support_second) >=
                      options.rival_support_ratio * std::max(support_first, support_second)) {
       ClearMatches();
       return false;
     }
-    // The second is the frame's state now; the first is tracked again if it won.
-    if (support_first >= support_second) TrackFromHypothesis(hypotheses[0], matched);
+    if (support_second > support_first) TrackFromHypothesis(hypotheses[1], matched);
   } else {
     TrackFromHypothesis(hypotheses[0], matched);
   }
