@@ -328,6 +328,14 @@ TEST(TrackerTest, OptionsThatCannotWorkAreRefusedByName) {
             std::string::npos);
   EXPECT_NE(error_of([](TrackerOptions* o) { o->local_ba_keyframes = 0; }).find("local_ba_keyframes"),
             std::string::npos);
+  // A PnP pose needs four points; a negative distance or ratio would refuse every pose.
+  EXPECT_NE(error_of([](TrackerOptions* o) { o->min_rival_consensus = 3; }).find("min_rival_consensus"),
+            std::string::npos);
+  EXPECT_NE(error_of([](TrackerOptions* o) { o->rival_pose_distance_m = -1; }).find("rival_pose_distance_m"),
+            std::string::npos);
+  EXPECT_NE(error_of([](TrackerOptions* o) { o->rival_support_ratio = 0; }).find("rival_support_ratio"),
+            std::string::npos);
+  EXPECT_EQ(error_of([](TrackerOptions* o) { o->min_rival_consensus = 4; }), "(no error)");
   EXPECT_EQ(error_of([](TrackerOptions*) {}), "(no error)");
 }
 
