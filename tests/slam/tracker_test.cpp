@@ -328,7 +328,8 @@ TEST(TrackerTest, OptionsThatCannotWorkAreRefusedByName) {
             std::string::npos);
   EXPECT_NE(error_of([](TrackerOptions* o) { o->local_ba_keyframes = 0; }).find("local_ba_keyframes"),
             std::string::npos);
-  // A PnP pose needs four points; a negative distance or ratio would refuse every pose.
+  // A PnP pose needs four points; a negative distance would count every rival as apart,
+  // and a zero ratio would refuse every relocalization that meets one.
   EXPECT_NE(error_of([](TrackerOptions* o) { o->min_rival_consensus = 3; }).find("min_rival_consensus"),
             std::string::npos);
   EXPECT_NE(error_of([](TrackerOptions* o) { o->rival_pose_distance_m = -1; }).find("rival_pose_distance_m"),
