@@ -295,11 +295,12 @@ const DescriptorIndex& Tracker::Impl::OwnPointIndex() {
 // Relocalization against every map point: nearest-neighbour descriptor search with a
 // ratio test, RANSAC PnP (up to two rival poses), pose optimisation, then a local-map
 // search. Two poses that both hold up on the local map leave the frame lost: it says
-// nothing certain of where it is (TrackerOptions::rival_support_ratio). The search goes
+// nothing certain of where it is (TrackerOptions::rival_support_ratio); a re-check
+// (kTakeStronger) takes the stronger, to weigh it against the pose tracked. The search goes
 // through descriptor indexes (by brute force a relocalization on city_boulevard's map
 // took 0.6 s, and a lost run pays it every frame): the loaded map's, built once, and
 // the run's own points', rebuilt when they changed.
-bool Tracker::Impl::Relocalize(bool long_term_only) {
+bool Tracker::Impl::Relocalize(bool long_term_only, RivalPolicy rival_policy) {
   ClearMatches();
   if (current.features.size() < 20) return false;
   if (localization_mode && long_term_index == nullptr) {
@@ -346,8 +347,9 @@ bool Tracker::Impl::Relocalize(bool long_term_only) {
     const int support_first = TrackFromHypothesis(hypotheses[0], matched);
     const Eigen::Vector3d center_first = current.T_cw.inverse().translation();
     const bool apart = (center_first - center_second).norm() > options.rival_pose_distance_m;
-    if (apart && std::min(support_first, support_second) >=
-                     options.rival_support_ratio * std::max(support_first, support_second)) {
+    const bool ambiguous = apart && std::min(support_first, support_second) >=
+                                        options.rival_support_ratio * std::max(support_first, support_second);
+    if (ambiguous && rival_policy == RivalPolicy::kStayLostWhenAmbiguous) {
       ClearMatches();
       return false;
     }
@@ -437,11 +439,16 @@ bool Tracker::Impl::RelocalizeOffMap() {
   if (long_term_inliers < options.min_long_term_inliers || kept_inliers < options.min_relocalization_inliers) {
     return false;
   }
+  DropWorkSince(first_point_off_map, off_map_since_frame);
+  return true;
+}
+
+void Tracker::Impl::DropWorkSince(std::uint64_t first_point, int since_frame) {
   for (const auto& owned : map->points()) {
-    if (!owned->fixed && owned->id >= first_point_off_map) Map::MarkBad(owned.get());
+    if (!owned->fixed && owned->id >= first_point) Map::MarkBad(owned.get());
   }
   for (const auto& keyframe : map->keyframes()) {
-    if (keyframe->frame_index >= off_map_since_frame) keyframe->bad = true;
+    if (keyframe->frame_index >= since_frame) keyframe->bad = true;
   }
   if (reference_keyframe != nullptr && reference_keyframe->bad) reference_keyframe = nullptr;
   for (size_t i = 0; i < current.points.size(); ++i) {
@@ -454,6 +461,68 @@ bool Tracker::Impl::RelocalizeOffMap() {
   // The instance snapshots were taken in the frame just left: against them everything
   // would seem to move.
   history.clear();
+}
+
+void Tracker::Impl::BeginProbation() {
+  if (!localization_mode) return;
+  probation_until_s = current.stamp_s + options.relocalization_probation_s;
+  probation_since_frame = current.index;
+  probation_first_point = map->UpcomingPointId();
+  last_probation_check_s = current.stamp_s;
+}
+
+// A relocalization is taken on one frame's evidence, and along repeated façades that
+// evidence can point to a look-alike with no rival left to doubt it; tracking then
+// carries on there, on the map. Searching the whole map again on later frames, while the
+// camera shows more of where it is, gives the place a second chance: the frame's own
+// place explains the façades and what differs from the look-alike (parked cars, trees,
+// street furniture). The tracked pose is compared on the long-term map's inliers only:
+// the points the run made since were made in the pose under test and agree with it.
+bool Tracker::Impl::RecheckRelocalization() {
+  if (!localization_mode || current.stamp_s > probation_until_s + 1e-9 ||
+      current.stamp_s - last_probation_check_s < options.off_map_relocalization_interval_s - 1e-9) {
+    return false;
+  }
+  last_probation_check_s = current.stamp_s;
+  auto long_term_inliers = [&] {
+    int inliers = 0;
+    for (size_t i = 0; i < current.points.size(); ++i) {
+      inliers += current.points[i] != nullptr && !current.outlier[i] && current.points[i]->fixed;
+    }
+    return inliers;
+  };
+  const int tracked_support = long_term_inliers();
+  const Eigen::Isometry3d tracked_T_cw = current.T_cw;
+  const std::vector<MapPoint*> tracked_points = current.points, tracked_rejected = current.rejected;
+  const std::vector<bool> tracked_outlier = current.outlier;
+  const int tracked_coarse_inliers = result.num_coarse_inliers;
+  const Eigen::Vector3d tracked_center = tracked_T_cw.inverse().translation();
+  bool replace = Relocalize(true, RivalPolicy::kTakeStronger);
+  if (replace) {
+    int kept_inliers = 0;
+    for (size_t i = 0; i < current.points.size(); ++i) {
+      const MapPoint* point = current.points[i];
+      if (point != nullptr && !current.outlier[i]) kept_inliers += point->fixed || point->id < probation_first_point;
+    }
+    const double moved_m = (current.T_cw.inverse().translation() - tracked_center).norm();
+    replace = moved_m > options.rival_pose_distance_m && kept_inliers >= options.min_relocalization_inliers &&
+              long_term_inliers() >= options.relocalization_recheck_margin * std::max(tracked_support, 1);
+  }
+  if (!replace) {
+    ClearMatches();
+    current.T_cw = tracked_T_cw;
+    current.points = tracked_points;
+    current.outlier = tracked_outlier;
+    current.rejected = tracked_rejected;
+    result.num_coarse_inliers = tracked_coarse_inliers;
+    for (const std::vector<MapPoint*>* matches : {&current.points, &current.rejected}) {
+      for (MapPoint* point : *matches) {
+        if (point != nullptr) point->last_matched_frame = current.index;
+      }
+    }
+    return false;
+  }
+  DropWorkSince(probation_first_point, probation_since_frame);
   return true;
 }
 

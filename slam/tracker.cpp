@@ -123,6 +123,10 @@ void CheckTrackerOptions(const TrackerOptions& options) {
           "must be positive (above 1: never refuse a relocalization for a rival)");
   require(options.off_map_relocalization_interval_s >= 0, "off_map_relocalization_interval_s",
           options.off_map_relocalization_interval_s, "must be >= 0");
+  require(options.relocalization_probation_s >= 0, "relocalization_probation_s", options.relocalization_probation_s,
+          "must be >= 0 (0: no re-check)");
+  require(options.relocalization_recheck_margin >= 1, "relocalization_recheck_margin",
+          options.relocalization_recheck_margin, "must be >= 1 (below 1 a weaker pose would replace a stronger)");
 }
 
 }  // namespace
@@ -235,7 +239,6 @@ std::optional<Eigen::Isometry3d> Tracker::EstimateCoarsePose() {
     if (s.localization_mode && options_.relocalize_off_map && s.off_long_term_map &&
         s.current.stamp_s - s.last_off_map_relocalization_s >= options_.off_map_relocalization_interval_s - 1e-9) {
       relocalized = s.pose_jumped = tracked = s.RelocalizeOffMap();
-      if (relocalized) s.last_relocalization_frame = s.current.index;
     }
     if (!relocalized) {
       tracked = s.TrackWithMotionModel() || s.TrackReferenceKeyframe();
@@ -246,6 +249,11 @@ std::optional<Eigen::Isometry3d> Tracker::EstimateCoarsePose() {
             recently_relocalized ? options_.min_relocalization_inliers : options_.min_tracking_inliers,
             options_.local_map_radius_px);
       }
+      if (tracked && !s.off_long_term_map) relocalized = s.pose_jumped = s.RecheckRelocalization();
+    }
+    if (relocalized) {
+      s.last_relocalization_frame = s.current.index;
+      s.BeginProbation();
     }
   }
   if (!tracked && !s.pending_first_keyframe) {
@@ -254,6 +262,7 @@ std::optional<Eigen::Isometry3d> Tracker::EstimateCoarsePose() {
     if (relocalized) {
       s.initialized = true;
       s.last_relocalization_frame = s.current.index;
+      s.BeginProbation();
       if (s.close_depth_m <= 0) s.close_depth_m = options_.close_depth_m > 0 ? options_.close_depth_m : 10.0;
     }
   }

@@ -194,6 +194,19 @@ struct TrackerOptions {
   int min_long_term_inliers = 10;
   bool relocalize_off_map = true;
   double off_map_relocalization_interval_s = 0.5;
+  // Localization mode: a relocalization on the long-term map is on probation for
+  // relocalization_probation_s. Meanwhile, at most once an
+  // off_map_relocalization_interval_s, the whole map is searched again; a pose found more
+  // than rival_pose_distance_m away with at least relocalization_recheck_margin times the
+  // tracked pose's inliers on the long-term map replaces it, and what was made since the
+  // relocalization is dropped. Along a boulevard of repeated façades the first frames
+  // of a second pass can relocalize at a look-alike that leaves no rival (16 RANSAC
+  // inliers, 17.7 m off) and then track there on the map: a look-alike explains the
+  // façades, where the frame is explains the façades and everything else in view, and
+  // a few frames on a new search finds that place with more support.
+  // 0 turns the re-check off.
+  double relocalization_probation_s = 5.0;
+  double relocalization_recheck_margin = 1.25;
   // Keyframes (ORB-SLAM2 RGB-D rules): a new one when the tracked inliers fall below
   // this share of the reference keyframe's points, or too few close points are tracked
   // (and more than 15 are: ORB-SLAM2's frame-count rules only ever add to these, with

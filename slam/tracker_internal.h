@@ -223,6 +223,13 @@ struct Tracker::Impl {
   int off_map_since_frame = 0;
   std::uint64_t first_point_off_map = 0;
   double last_off_map_relocalization_s = -1e9;
+  // Localization mode: the last relocalization's probation (TrackerOptions::
+  // relocalization_probation_s): when it ends, the first frame and the first point made
+  // since the relocalization, and when the whole map was last searched again.
+  double probation_until_s = -1e9;
+  int probation_since_frame = 0;
+  std::uint64_t probation_first_point = 0;
+  double last_probation_check_s = -1e9;
   // The loaded map's points and their descriptor index (Relocalize), built at the first
   // relocalization of a localization run.
   std::vector<MapPoint*> long_term_points;
@@ -302,8 +309,12 @@ struct Tracker::Impl {
     Eigen::Isometry3d T_cw;
     std::vector<int> matches;  // RANSAC's consensus: rows of Relocalize()'s match list
   };
+  // What a relocalization does with two poses far apart that both hold up: a frame with
+  // nothing else to go on stays lost; a re-check, which holds a tracked pose to weigh
+  // against, takes the stronger (RecheckRelocalization).
+  enum class RivalPolicy { kStayLostWhenAmbiguous, kTakeStronger };
   // Against every map point, or with `long_term_only` against the loaded map's.
-  bool Relocalize(bool long_term_only);
+  bool Relocalize(bool long_term_only, RivalPolicy rival_policy = RivalPolicy::kStayLostWhenAmbiguous);
   std::vector<RelocalizationHypothesis> RivalPoses(const std::vector<std::pair<int, MapPoint*>>& matched,
                                                    const std::vector<cv::Point3f>& object_points,
                                                    const std::vector<cv::Point2f>& image_points) const;
@@ -312,6 +323,16 @@ struct Tracker::Impl {
   const DescriptorIndex& OwnPointIndex();
   // Off the long-term map: relocalizes on it, and on success drops what was made off it.
   bool RelocalizeOffMap();
+  // Drops the run's own points from `first_point` on and its keyframes from
+  // `since_frame` on, made in a frame just found wrong, and the current frame's matches
+  // to them.
+  void DropWorkSince(std::uint64_t first_point, int since_frame);
+  // Starts the probation of a relocalization made at the current frame.
+  void BeginProbation();
+  // On probation and tracked: searches the whole long-term map again and takes a pose
+  // found elsewhere with markedly more support (TrackerOptions::
+  // relocalization_probation_s); true when it did. Else the frame is left as tracked.
+  bool RecheckRelocalization();
   // Localization mode, after the fine pose: counts its inliers on the long-term map into
   // the result and notes when the run leaves the map.
   void NoteLongTermMapMatches();

@@ -42,6 +42,8 @@ const NamedOptionTable<TrackerOptions>& Table() {
       SEGSLAM_INT(min_long_term_inliers),
       SEGSLAM_BOOL(relocalize_off_map),
       SEGSLAM_REAL(off_map_relocalization_interval_s),
+      SEGSLAM_REAL(relocalization_probation_s),
+      SEGSLAM_REAL(relocalization_recheck_margin),
       SEGSLAM_REAL(keyframe_tracked_ratio),
       SEGSLAM_REAL(close_depth_m),
       SEGSLAM_BOOL(local_bundle_adjustment),
