@@ -614,6 +614,30 @@ TEST(TrackerTest, RelocalizationBetweenTwoLookAlikePlacesStaysLost) {
   EXPECT_TRUE(error_m < 0.05 || std::abs(error_m - look_alike_offset.norm()) < 0.05) << error_m;
 }
 
+// The long-term map of a pan from the back wall to the side wall of the room, with the
+// back wall's points (x >= 3.9 m) moved by kLookAlikeOffset: a look-alike of that wall
+// 0.78 m from where it is, the side wall where it is.
+const Eigen::Vector3d kLookAlikeOffset(-0.5, 0.6, 0.0);
+
+LongTermMapData MapWithALookAlikeBackWall(const PinholeCamera& camera, const std::vector<testing::TexturedQuad>& room) {
+  Tracker mapper(camera, StartingAt(PanToSideWallPose(0)));
+  for (int i = 0; i <= 60; ++i) {
+    EXPECT_TRUE(mapper.Track(RenderQuads(room, camera, PanToSideWallPose(i), i, i / 30.0).frame, nullptr,
+                             SlamMode::kPlain)
+                    .localized())
+        << "mapping frame " << i;
+  }
+  LongTermMapData map = mapper.ExportLongTermMap(true);
+  int moved = 0;
+  for (StoredMapPoint& point : map.points) {
+    if (point.position_w.x() < 3.9) continue;
+    point.position_w += kLookAlikeOffset;
+    ++moved;
+  }
+  EXPECT_GT(moved, 200);
+  return map;
+}
+
 // The look-alike trap of a long-term map (repeated facades along a boulevard): the map's
 // copy of the back wall lies 0.78 m from where the wall is, so the second visit, which
 // starts facing that wall, relocalizes 0.78 m off and tracks there, on the map. Once it
@@ -623,21 +647,8 @@ TEST(TrackerTest, RelocalizationBetweenTwoLookAlikePlacesStaysLost) {
 TEST(TrackerTest, RelocalizationAtALookAlikePlaceIsCorrectedOnceOffTheMap) {
   const PinholeCamera camera = TestCamera();
   const auto room = RoomQuads(5);
-  Tracker mapper(camera, StartingAt(PanToSideWallPose(0)));
-  for (int i = 0; i <= 60; ++i) {
-    ASSERT_TRUE(mapper.Track(RenderQuads(room, camera, PanToSideWallPose(i), i, i / 30.0).frame, nullptr,
-                             SlamMode::kPlain)
-                    .localized());
-  }
-  LongTermMapData map = mapper.ExportLongTermMap(true);
-  const Eigen::Vector3d look_alike_offset(-0.5, 0.6, 0.0);
-  int moved = 0;
-  for (StoredMapPoint& point : map.points) {
-    if (point.position_w.x() < 3.9) continue;
-    point.position_w += look_alike_offset;
-    ++moved;
-  }
-  ASSERT_GT(moved, 200);
+  const LongTermMapData map = MapWithALookAlikeBackWall(camera, room);
+  const Eigen::Vector3d look_alike_offset = kLookAlikeOffset;
 
   auto second_visit = [&](bool relocalize_off_map, std::vector<FrameResult>* frames) {
     TrackerOptions options;
@@ -682,17 +693,8 @@ TEST(TrackerTest, RelocalizationAtALookAlikePlaceIsCorrectedOnceOffTheMap) {
 TEST(TrackerTest, RelocalizationAtALookAlikeIsReplacedWhileOnProbation) {
   const PinholeCamera camera = TestCamera();
   const auto room = RoomQuads(5);
-  Tracker mapper(camera, StartingAt(PanToSideWallPose(0)));
-  for (int i = 0; i <= 60; ++i) {
-    ASSERT_TRUE(mapper.Track(RenderQuads(room, camera, PanToSideWallPose(i), i, i / 30.0).frame, nullptr,
-                             SlamMode::kPlain)
-                    .localized());
-  }
-  LongTermMapData map = mapper.ExportLongTermMap(true);
-  const Eigen::Vector3d look_alike_offset(-0.5, 0.6, 0.0);
-  for (StoredMapPoint& point : map.points) {
-    if (point.position_w.x() >= 3.9) point.position_w += look_alike_offset;
-  }
+  const LongTermMapData map = MapWithALookAlikeBackWall(camera, room);
+  const Eigen::Vector3d look_alike_offset = kLookAlikeOffset;
   auto pose = [](int frame) {
     const double turned = std::clamp(frame / 60.0, 0.0, 1.0);
     return testing::LookingAlongX(Eigen::Vector3d(1.0, 0.0, 1.5), turned * 0.75 * M_PI / 2);
