@@ -429,18 +429,21 @@ bool Tracker::Impl::RelocalizeOffMap() {
   last_off_map_relocalization_s = current.stamp_s;
   if (!Relocalize(true)) return false;
   // Decided on what stays: a pose held up by the points about to be dropped is no pose.
-  int long_term_inliers = 0, kept_inliers = 0;
-  for (size_t i = 0; i < current.points.size(); ++i) {
-    const MapPoint* point = current.points[i];
-    if (point == nullptr || current.outlier[i]) continue;
-    long_term_inliers += point->fixed;
-    kept_inliers += point->fixed || point->id < first_point_off_map;
-  }
-  if (long_term_inliers < options.min_long_term_inliers || kept_inliers < options.min_relocalization_inliers) {
+  if (LongTermInliers() < options.min_long_term_inliers ||
+      InliersKeptWhenDroppingFrom(first_point_off_map) < options.min_relocalization_inliers) {
     return false;
   }
   DropWorkSince(first_point_off_map, off_map_since_frame);
   return true;
+}
+
+int Tracker::Impl::InliersKeptWhenDroppingFrom(std::uint64_t first_dropped_point) const {
+  int inliers = 0;
+  for (size_t i = 0; i < current.points.size(); ++i) {
+    const MapPoint* point = current.points[i];
+    if (point != nullptr && !current.outlier[i]) inliers += point->fixed || point->id < first_dropped_point;
+  }
+  return inliers;
 }
 
 void Tracker::Impl::DropWorkSince(std::uint64_t first_point, int since_frame) {
@@ -484,14 +487,7 @@ bool Tracker::Impl::RecheckRelocalization() {
     return false;
   }
   last_probation_check_s = current.stamp_s;
-  auto long_term_inliers = [&] {
-    int inliers = 0;
-    for (size_t i = 0; i < current.points.size(); ++i) {
-      inliers += current.points[i] != nullptr && !current.outlier[i] && current.points[i]->fixed;
-    }
-    return inliers;
-  };
-  const int tracked_support = long_term_inliers();
+  const int tracked_support = LongTermInliers();
   const Eigen::Isometry3d tracked_T_cw = current.T_cw;
   const std::vector<MapPoint*> tracked_points = current.points, tracked_rejected = current.rejected;
   const std::vector<bool> tracked_outlier = current.outlier;
@@ -499,16 +495,14 @@ bool Tracker::Impl::RecheckRelocalization() {
   const Eigen::Vector3d tracked_center = tracked_T_cw.inverse().translation();
   bool replace = Relocalize(true, RivalPolicy::kTakeStronger);
   if (replace) {
-    int kept_inliers = 0;
-    for (size_t i = 0; i < current.points.size(); ++i) {
-      const MapPoint* point = current.points[i];
-      if (point != nullptr && !current.outlier[i]) kept_inliers += point->fixed || point->id < probation_first_point;
-    }
     const double moved_m = (current.T_cw.inverse().translation() - tracked_center).norm();
-    replace = moved_m > options.rival_pose_distance_m && kept_inliers >= options.min_relocalization_inliers &&
-              long_term_inliers() >= options.relocalization_recheck_margin * std::max(tracked_support, 1);
+    replace = moved_m > options.rival_pose_distance_m &&
+              InliersKeptWhenDroppingFrom(probation_first_point) >= options.min_relocalization_inliers &&
+              LongTermInliers() >= options.relocalization_recheck_margin * std::max(tracked_support, 1);
   }
   if (!replace) {
+    // The map points the search looked at keep that look in their visible count, as a
+    // losing rival's do.
     ClearMatches();
     current.T_cw = tracked_T_cw;
     current.points = tracked_points;
@@ -527,11 +521,7 @@ bool Tracker::Impl::RecheckRelocalization() {
 }
 
 void Tracker::Impl::NoteLongTermMapMatches() {
-  int inliers = 0;
-  for (size_t i = 0; fine_ok && i < current.points.size(); ++i) {
-    const MapPoint* point = current.points[i];
-    inliers += point != nullptr && !current.outlier[i] && point->fixed;
-  }
+  const int inliers = fine_ok ? LongTermInliers() : 0;
   result.num_long_term_inliers = inliers;
   result.on_long_term_map = fine_ok && inliers >= options.min_long_term_inliers;
   if (!fine_ok) return;  // a lost frame says nothing of where the run is

@@ -201,7 +201,7 @@ struct TrackerOptions {
   // tracked pose's inliers on the long-term map replaces it, and what was made since the
   // relocalization is dropped. Along a boulevard of repeated façades the first frames
   // of a second pass can relocalize at a look-alike that leaves no rival (16 RANSAC
-  // inliers, 17.7 m off) and then track there on the map: a look-alike explains the
+  // inliers, 125 m on) and then track there on the map: a look-alike explains the
   // façades, where the frame is explains the façades and everything else in view, and
   // a few frames on a new search finds that place with more support.
   // 0 turns the re-check off.

@@ -323,6 +323,10 @@ struct Tracker::Impl {
   const DescriptorIndex& OwnPointIndex();
   // Off the long-term map: relocalizes on it, and on success drops what was made off it.
   bool RelocalizeOffMap();
+  // The current frame's inliers that stay when the run's own points from
+  // `first_dropped_point` on are dropped; with 0, its inliers on the long-term map.
+  int InliersKeptWhenDroppingFrom(std::uint64_t first_dropped_point) const;
+  int LongTermInliers() const { return InliersKeptWhenDroppingFrom(0); }
   // Drops the run's own points from `first_point` on and its keyframes from
   // `since_frame` on, made in a frame just found wrong, and the current frame's matches
   // to them.
