@@ -469,7 +469,6 @@ void Tracker::Impl::DropWorkSince(std::uint64_t first_point, int since_frame) {
 void Tracker::Impl::BeginProbation() {
   if (!localization_mode) return;
   probation_until_s = current.stamp_s + options.relocalization_probation_s;
-  probation_since_frame = current.index;
   probation_first_point = map->UpcomingPointId();
   last_probation_check_s = current.stamp_s;
 }
@@ -516,7 +515,7 @@ bool Tracker::Impl::RecheckRelocalization() {
     }
     return false;
   }
-  DropWorkSince(probation_first_point, probation_since_frame);
+  DropWorkSince(probation_first_point, last_relocalization_frame);
   return true;
 }
 

@@ -224,10 +224,9 @@ struct Tracker::Impl {
   std::uint64_t first_point_off_map = 0;
   double last_off_map_relocalization_s = -1e9;
   // Localization mode: the last relocalization's probation (TrackerOptions::
-  // relocalization_probation_s): when it ends, the first frame and the first point made
-  // since the relocalization, and when the whole map was last searched again.
+  // relocalization_probation_s), which began at last_relocalization_frame: when it ends,
+  // the first point made since it began, and when the whole map was last searched again.
   double probation_until_s = -1e9;
-  int probation_since_frame = 0;
   std::uint64_t probation_first_point = 0;
   double last_probation_check_s = -1e9;
   // The loaded map's points and their descriptor index (Relocalize), built at the first
