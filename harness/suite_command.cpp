@@ -118,6 +118,7 @@ struct SuiteArgs {
   ScenarioRunRequest run;  // repeats, modes, frames, cache... shared by every entry
   std::string suite_file;
   std::string out_dir;
+  bool check_only = false;  // --check: validate every entry, run none
 };
 
 double Median(const nlohmann::json& results, const std::string& pass, const std::string& mode,
@@ -313,6 +314,11 @@ int RunSuite(const SuiteArgs& args) {
   const auto start = std::chrono::steady_clock::now();
   const Suite suite = LoadSuite(args.suite_file);
   CheckSuiteEntries(suite, args);
+  if (args.check_only) {
+    fmt::print("suite {}: {} entries checked (scenarios, overrides, bench settings, thresholds); nothing run\n",
+               suite.name, suite.entries.size());
+    return 0;
+  }
   const fs::path out_dir = args.out_dir.empty() ? fs::path("reports") / suite.name : fs::path(args.out_dir);
   fmt::print("segslam scenario suite: {} ({} entries) into {}\n", suite.name, suite.entries.size(), out_dir.string());
   std::vector<nlohmann::json> results;
@@ -405,6 +411,8 @@ void AddSuiteCommand(CLI::App& scenario, std::function<int()>* action) {
   suite->add_option("--cache", args->run.cache_dir, "Folder of cached datasets")->capture_default_str();
   suite->add_option("--gl", args->run.gl, "Off-screen GL back-end for generation: osmesa or egl")->capture_default_str();
   suite->add_flag("-q,--quiet", args->run.quiet, "No progress bars");
+  suite->add_flag("--check", args->check_only,
+                  "Check the suite file and every entry (scenario, overrides, bench settings, thresholds), run nothing");
   suite->callback([args, action] { *action = [args] { return RunSuite(*args); }; });
 }
 

@@ -373,6 +373,34 @@ TEST_F(SweepCliTest, BadInputIsOneLineBeforeAnyWork) {
   }
 }
 
+// Every shipped suite file passes `scenario suite --check`: each entry's scenario,
+// overrides, bench settings and thresholds are valid, and nothing is generated or run.
+TEST_F(SweepCliTest, ShippedSuiteFilesPassTheirCheck) {
+  const fs::path folder = fs::path(SEGSLAM_SOURCE_DIR) / "scenarios" / "suites";
+  int files = 0;
+  for (const auto& entry : fs::directory_iterator(folder)) {
+    if (entry.path().extension() != ".yaml") continue;
+    ++files;
+    const CommandOutput result = Run("scenario suite " + entry.path().string() + " --check --cache " +
+                                     (dir_ / "cache").string() + " --out " + (dir_ / "out").string());
+    EXPECT_EQ(result.exit_code, 0) << entry.path() << "\n" << result.stderr_text;
+    EXPECT_NE(result.stdout_text.find("entries checked"), std::string::npos) << result.stdout_text;
+  }
+  EXPECT_GE(files, 1);
+  EXPECT_FALSE(fs::exists(dir_ / "cache"));
+  EXPECT_FALSE(fs::exists(dir_ / "out"));
+
+  // --check refuses what a run would refuse, in one line.
+  const fs::path late = dir_ / "late_suite.yaml";
+  std::ofstream(late) << "name: late\nentries:\n"
+                      << "  - {name: a, scenario: " << kSmallOffice << ", tables: [ate]}\n"
+                      << "  - {name: b, scenario: " << kSmallOffice << ", set: [bench.segmenter=magic], tables: [ate]}\n";
+  const CommandOutput refused = Run("scenario suite " + late.string() + " --check");
+  EXPECT_EQ(refused.exit_code, 1);
+  EXPECT_EQ(LineCount(refused.stderr_text), 1) << refused.stderr_text;
+  EXPECT_NE(refused.stderr_text.find("entry b: "), std::string::npos) << refused.stderr_text;
+}
+
 // `segslam scenario suite`: entries joined into the paper's tables, and a bad suite file
 // refused in one line before any work.
 TEST_F(SweepCliTest, SuiteJoinsItsEntriesIntoThePapersTables) {
