@@ -384,8 +384,8 @@ std::vector<Tracker::Impl::RelocalizationHypothesis> Tracker::Impl::RivalPoses(
     cv::Mat rvec, tvec;
     std::vector<int> inliers;
     const bool solved = cv::solvePnPRansac(round_object_points, round_image_points, cv::Mat(camera.KCv()),
-                                           cv::noArray(), rvec, tvec, false, 300, 4.0f, 0.99, inliers,
-                                           cv::SOLVEPNP_EPNP);
+                                           cv::noArray(), rvec, tvec, false, options.relocalization_ransac_iterations,
+                                           4.0f, 0.99, inliers, cv::SOLVEPNP_AP3P);
     if (!solved || inliers.size() < min_consensus) break;
     RelocalizationHypothesis hypothesis;
     hypothesis.T_cw = PoseFromRvecTvec(rvec, tvec);

@@ -119,6 +119,8 @@ void CheckTrackerOptions(const TrackerOptions& options) {
   require(options.min_rival_consensus >= 4, "min_rival_consensus", options.min_rival_consensus,
           "must be >= 4 (a PnP pose needs four points)");
   require(options.rival_pose_distance_m >= 0, "rival_pose_distance_m", options.rival_pose_distance_m, "must be >= 0");
+  require(options.relocalization_ransac_iterations >= 1, "relocalization_ransac_iterations",
+          options.relocalization_ransac_iterations, "must be >= 1");
   require(options.rival_support_ratio > 0, "rival_support_ratio", options.rival_support_ratio,
           "must be positive (above 1: never refuse a relocalization for a rival)");
   require(options.off_map_relocalization_interval_s >= 0, "off_map_relocalization_interval_s",

@@ -39,6 +39,7 @@ const NamedOptionTable<TrackerOptions>& Table() {
       SEGSLAM_INT(min_rival_consensus),
       SEGSLAM_REAL(rival_pose_distance_m),
       SEGSLAM_REAL(rival_support_ratio),
+      SEGSLAM_INT(relocalization_ransac_iterations),
       SEGSLAM_INT(min_long_term_inliers),
       SEGSLAM_BOOL(relocalize_off_map),
       SEGSLAM_REAL(off_map_relocalization_interval_s),
