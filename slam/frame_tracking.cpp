@@ -5,6 +5,7 @@
 #include <cmath>
 #include <opencv2/features2d.hpp>
 
+#include "slam/ransac_pnp.h"
 #include "slam/tracker_internal.h"
 
 namespace segslam::slam {
@@ -381,15 +382,13 @@ std::vector<Tracker::Impl::RelocalizationHypothesis> Tracker::Impl::RivalPoses(
       round_matches.push_back(static_cast<int>(k));
     }
     if (round_matches.size() < min_consensus) break;
-    cv::Mat rvec, tvec;
-    std::vector<int> inliers;
-    const bool solved = cv::solvePnPRansac(round_object_points, round_image_points, cv::Mat(camera.KCv()),
-                                           cv::noArray(), rvec, tvec, false, options.relocalization_ransac_iterations,
-                                           4.0f, 0.99, inliers, cv::SOLVEPNP_AP3P);
-    if (!solved || inliers.size() < min_consensus) break;
+    const std::optional<PnpConsensus> consensus =
+        SolveRansacPnp(round_object_points, round_image_points, camera, options.relocalization_ransac_iterations,
+                       static_cast<int>(min_consensus));
+    if (!consensus) break;
     RelocalizationHypothesis hypothesis;
-    hypothesis.T_cw = PoseFromRvecTvec(rvec, tvec);
-    for (int k : inliers) {
+    hypothesis.T_cw = consensus->T_cw;
+    for (int k : consensus->inliers) {
       const int match = round_matches[static_cast<size_t>(k)];
       taken[static_cast<size_t>(match)] = true;
       hypothesis.matches.push_back(match);

@@ -19,9 +19,7 @@
 #include <vector>
 
 #include <Eigen/Geometry>
-#include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
-#include <opencv2/core/eigen.hpp>
 
 #include "slam/bundle_adjustment.h"
 #include "slam/descriptor_index.h"
@@ -178,17 +176,6 @@ struct WorkingFrame {
   std::vector<std::uint16_t> near_instance;
   Eigen::Isometry3d T_cw = Eigen::Isometry3d::Identity();
 };
-
-inline Eigen::Isometry3d PoseFromRvecTvec(const cv::Mat& rvec, const cv::Mat& tvec) {
-  cv::Mat rotation;
-  cv::Rodrigues(rvec, rotation);
-  Eigen::Matrix3d R;
-  cv::cv2eigen(rotation, R);
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = R;
-  T.translation() = Eigen::Vector3d(tvec.at<double>(0), tvec.at<double>(1), tvec.at<double>(2));
-  return T;
-}
 
 struct Tracker::Impl {
   Impl(const PinholeCamera& cam, const TrackerOptions& opts, Map* m)
