@@ -189,8 +189,8 @@ struct TrackerOptions {
   // a consensus holding 20 % of them is drawn in 2000 samples with probability 0.96,
   // 25 % with 0.9996. With 300 samples of five (EPnP) those were 0.09 and 0.25: pass 2
   // of a boulevard missed its true place for four frames and then took a look-alike
-  // 125 m on, the one consensus that a lucky draw found (README, "Run SLAM"). A lost
-  // frame costs about 30 ms more.
+  // 125 m on, the one consensus that a lucky draw found (README, "Run SLAM"). On 100
+  // matches a round takes 30 ms instead of 4.5 (slam_benchmarks), paid by lost frames.
   int relocalization_ransac_iterations = 2000;
   // Localization mode: a frame with fewer fine-pose inliers on the long-term map's points
   // than this is off the map (ORB-SLAM2's localization mode counts 10), tracked only on
@@ -208,11 +208,12 @@ struct TrackerOptions {
   // off_map_relocalization_interval_s, the whole map is searched again; a pose found more
   // than rival_pose_distance_m away with at least relocalization_recheck_margin times the
   // tracked pose's inliers on the long-term map replaces it, and what was made since the
-  // relocalization is dropped. Along a boulevard of repeated façades the first frames
-  // of a second pass can relocalize at a look-alike that leaves no rival (16 RANSAC
-  // inliers, 125 m on) and then track there on the map: a look-alike explains the
-  // façades, where the frame is explains the façades and everything else in view, and
-  // a few frames on a new search finds that place with more support.
+  // relocalization is dropped. Along a boulevard of repeated façades a relocalization can
+  // land at a look-alike whose rival RANSAC did not find (it did 125 m on with 300
+  // samples: relocalization_ransac_iterations) and then track there on the map: a
+  // look-alike explains the façades, where the frame is explains the façades and
+  // everything else in view, and a few frames on a new search finds that place with
+  // more support.
   // 0 turns the re-check off.
   double relocalization_probation_s = 5.0;
   double relocalization_recheck_margin = 1.25;
