@@ -13,7 +13,7 @@
 # take about 13 minutes on two cores once the build is made (measured 2026-12-03: 167 s
 # to generate, the eight runs in 651 s); the paper's ten repeats:
 # ./build/segslam scenario run scenarios/city_boulevard.yaml --jobs "$(nproc)"
-# The street-grid route of scenarios/city_two_pass.yaml, where traffic does not mislead
+# The street-grid route of scenarios/city_street_grid.yaml, where traffic does not mislead
 # plain (README status), runs the same way.
 set -euo pipefail
 cd "$(dirname "$0")/.."

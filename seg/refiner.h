@@ -167,7 +167,7 @@ struct RefinerOptions {
   // 100, pass 1 99.5 -> 100; fcis-like seeds 1-3, mean change office p1 / p2 / city p1 /
   // p2 +1.0 / -0.2 / +1.1 / +0.1 (mIoU within 0.7 either way). In the mutual loop (SLAM
   // poses), refined mAP, off -> on: office_walking_xyz fcis-like (2 seeds) p1 69.7 ->
-  // 71.7, p2 66.9 -> 67.8, at half its errors 90.1 -> 91.4; city_two_pass (seeds 1-3)
+  // 71.7, p2 66.9 -> 67.8, at half its errors 90.1 -> 91.4; city_street_grid (seeds 1-3)
   // +0.5 to +1.5 on both passes; mIoU within 0.3, and SLAM's ATE unchanged up to the
   // preset's errors (README: segmentation_strength).
   bool trim_keeps_region_depth = true;

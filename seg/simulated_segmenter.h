@@ -174,7 +174,7 @@ struct SimulatedSegmenterOptions {
   // The named presets: "clean" (ground truth, every error off), "fcis-like" (the
   // defaults, tuned towards the paper's FCIS, mAP 0.63-0.67 and mIoU 0.56-0.65, on the
   // shipped scenarios: `segslam seg-eval DATASET`, seed 1, full length, raw mAP / mIoU
-  // of pass 1, pass 2: city_two_pass 66.0/51.1, 60.1/44.4; office_walking_xyz
+  // of pass 1, pass 2: city_street_grid 66.0/51.1, 60.1/44.4; office_walking_xyz
   // 64.9/64.5, 61.4/61.4; _static 65.2/63.4, 69.9/67.8; _rpy 59.2/61.6, 64.0/65.1;
   // _halfsphere 67.2/66.6, 64.0/62.0; office_sitting_xyz 66.5/65.3, 66.2/65.3;
   // _halfsphere 65.8/63.9, 63.6/61.8; means: city 63.1/47.8, offices 64.8/64.1. The

@@ -171,7 +171,7 @@ namespace {
 // no hidden partial directory left beside it.
 TEST_F(CliBadInputTest, InterruptLeavesNothingBehind) {
   const fs::path out = dir_ / "out";
-  const std::string scenario = SEGSLAM_SOURCE_DIR "/scenarios/city_two_pass.yaml";
+  const std::string scenario = SEGSLAM_SOURCE_DIR "/scenarios/city_street_grid.yaml";
   const pid_t pid = ::fork();
   ASSERT_GE(pid, 0);
   if (pid == 0) {

@@ -42,7 +42,7 @@ std::vector<std::string> Lines(const std::string& text) {
 
 ReportDocument SampleDocument() {
   ReportDocument document("Run <A> & \"B\"");
-  document.AddMetadata("scenario", "scenarios/city_two_pass.yaml");
+  document.AddMetadata("scenario", "scenarios/city_street_grid.yaml");
   document.AddMetadata("seeds", "1, 2, 3");
   document.AddHeading("Trajectories");
   document.AddParagraph("ATE < 5 cm for <script>alert('x')</script>\nsecond line");
@@ -98,7 +98,7 @@ TEST(ReportDocumentTest, MarkdownTableHasOneColumnPerHeaderCell) {
   EXPECT_NE(md.find("| mask\\|moveable | 0.050 | 0.040 | 0.070 |"), std::string::npos);
   EXPECT_NE(md.find("![Top view \\<x-y\\>](figures/top%20view.png)"), std::string::npos);
   EXPECT_NE(md.find("# Run \\<A\\> & \"B\""), std::string::npos);
-  EXPECT_NE(md.find("- **scenario:** scenarios/city\\_two\\_pass.yaml"), std::string::npos);
+  EXPECT_NE(md.find("- **scenario:** scenarios/city\\_street\\_grid.yaml"), std::string::npos);
   // A line break inside a paragraph stays a line break (CommonMark's backslash break).
   EXPECT_NE(md.find("\\</script\\>\\\nsecond line"), std::string::npos);
 }

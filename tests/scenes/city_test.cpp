@@ -168,7 +168,7 @@ TEST(CityTest, RouteHasTheRequestedLengthHeightAndRate) {
 }
 
 TEST(CityTest, DefaultRouteLengthWithinTwoPercent) {
-  const Scenario s = LoadScenario(ScenarioPath("city_two_pass.yaml"));
+  const Scenario s = LoadScenario(ScenarioPath("city_street_grid.yaml"));
   const World w = BuildWorld(s);
   EXPECT_NEAR(RouteLength(w, Pass::kFirst), 200.0, 4.0);
   EXPECT_NEAR(RouteLength(w, Pass::kSecond), 200.0, 6.0);
@@ -253,7 +253,7 @@ TEST(CityTest, SecondPassChangesMatchShares) {
 TEST(CityTest, RelocatedShiftMovesEveryVehicleAlongTheCurb) {
   // Every parked vehicle of the default city moves, so neighbours move too, both ways,
   // on both curbs of a street (whose rows run against the traffic on one of them).
-  Scenario s = LoadScenario(ScenarioPath("city_two_pass.yaml"));
+  Scenario s = LoadScenario(ScenarioPath("city_street_grid.yaml"));
   s.pass2.relocated_shift_m = 1.0;
   s.pass2.relocated_share = 1.0;
   s.pass2.removed_share = 0.0;
@@ -316,7 +316,7 @@ TEST(CityTest, NothingMovesInTheStaticCity) {
 
 TEST(CityTest, CameraIsNeverInsideAGeom) {
   for (const std::string file :
-       {"test/city_small.yaml", "city_two_pass.yaml", "city_rush_hour.yaml", "city_boulevard.yaml"}) {
+       {"test/city_small.yaml", "city_street_grid.yaml", "city_rush_hour.yaml", "city_boulevard.yaml"}) {
     const World w = BuildWorld(LoadScenario(ScenarioPath(file)));
     for (Pass pass : kBothPasses) {
       for (int f = 0; f < w.frames_per_pass[PassIndex(pass)]; f += 3) {
@@ -598,7 +598,7 @@ TEST(CityTest, RedLightLeadIsTheVehicleKindAsked) {
 // pedestrians on the route's sidewalks and crosswalks. Checked geometrically (object roots
 // in the horizontal field of view, within 40 m in front), and for clearance at frame rate.
 TEST(CityTest, MovingActorsAreSeenAlongTheRouteAndKeepClear) {
-  for (const std::string file : {"city_two_pass.yaml", "city_rush_hour.yaml"}) {
+  for (const std::string file : {"city_street_grid.yaml", "city_rush_hour.yaml"}) {
     const World w = BuildWorld(LoadScenario(ScenarioPath(file)));
     const double tan_half_h = std::tan(0.5 * w.camera.fovy_deg * M_PI / 180.0) * w.camera.width / w.camera.height;
     for (Pass pass : kBothPasses) {
@@ -636,11 +636,11 @@ TEST(CityTest, MovingActorsAreSeenAlongTheRouteAndKeepClear) {
 }
 
 TEST(CityTest, VehiclesNeverTouchEachOther) {
-  for (const std::string file : {"city_two_pass.yaml", "city_rush_hour.yaml", "city_boulevard.yaml"}) {
+  for (const std::string file : {"city_street_grid.yaml", "city_rush_hour.yaml", "city_boulevard.yaml"}) {
     const Scenario s = LoadScenario(ScenarioPath(file));
     const World w = BuildWorld(s);
     std::printf("%s: %d moving actors left out for want of a clear path\n", file.c_str(), w.movers_left_out);
-    if (file == "city_two_pass.yaml") {
+    if (file == "city_street_grid.yaml") {
       EXPECT_EQ(w.movers_left_out, 0) << "the default city's streets hold its traffic";
     }
     ExpectParkedVehiclesInTheirLanesApart(w, s);
@@ -677,7 +677,7 @@ TEST(CityTest, VehiclesNeverTouchEachOther) {
 // (or end) meanwhile: movers in a heap there touched each other and were left out (12 of
 // rush hour's), and stood still where the camera could see them.
 TEST(CityTest, MoversAreOnTheirPathsForTheWholePass) {
-  for (const std::string file : {"city_two_pass.yaml", "city_rush_hour.yaml"}) {
+  for (const std::string file : {"city_street_grid.yaml", "city_rush_hour.yaml"}) {
     const World w = BuildWorld(LoadScenario(ScenarioPath(file)));
     int movers = 0;
     for (Pass pass : kBothPasses) {
@@ -703,7 +703,7 @@ TEST(CityTest, MoversAreOnTheirPathsForTheWholePass) {
 TEST(CityTest, PedestriansWalkClearOfStreetFurniture) {
   constexpr double kBodyRadiusM = 0.25;
   for (const std::string width : {"default", "2.5", "4"}) {
-    Scenario s = LoadScenario(ScenarioPath("city_two_pass.yaml"));
+    Scenario s = LoadScenario(ScenarioPath("city_street_grid.yaml"));
     ApplyOverride(s, "city.pedestrians", "30");
     if (width != "default") ApplyOverride(s, "city.sidewalk_width_m", width);
     const World w = BuildWorld(s);
@@ -745,7 +745,7 @@ TEST(CityTest, PedestriansWalkClearOfStreetFurniture) {
         }
       }
     }
-    std::printf("city_two_pass.yaml, sidewalk %s m: %d pedestrians walk through street furniture\n", width.c_str(),
+    std::printf("city_street_grid.yaml, sidewalk %s m: %d pedestrians walk through street furniture\n", width.c_str(),
                 touches);
     EXPECT_EQ(touches, 0) << "sidewalk " << width << " m";
   }
@@ -757,10 +757,10 @@ TEST(CityTest, PedestriansWalkClearOfStreetFurniture) {
 // body's width apart, so that people meeting each other pass (with one line for all, 24
 // of this city's 120 walkers were left out; 14 now).
 TEST(CityTest, PedestriansKeepRightOnTheSidewalks) {
-  Scenario s = LoadScenario(ScenarioPath("city_two_pass.yaml"));
+  Scenario s = LoadScenario(ScenarioPath("city_street_grid.yaml"));
   ApplyOverride(s, "city.pedestrians", "60");
   const World w = BuildWorld(s);
-  std::printf("city_two_pass.yaml with 60 pedestrians: %d movers left out\n", w.movers_left_out);
+  std::printf("city_street_grid.yaml with 60 pedestrians: %d movers left out\n", w.movers_left_out);
   const double block = s.city.block_size_m, road = s.city.road_width_m, walk = s.city.sidewalk_width_m;
   const double near = city_layout::kWalkStripNearM, far = walk - city_layout::kWalkStripFarM;
   const double band = 0.5 * (far - near - 2 * city_layout::kWalkerClearanceM);
@@ -805,7 +805,7 @@ TEST(CityTest, PedestriansKeepRightOnTheSidewalks) {
 }
 
 TEST(CityTest, SidewalksTooNarrowToWalkPastTheirFurnitureAreRefused) {
-  Scenario s = LoadScenario(ScenarioPath("city_two_pass.yaml"));
+  Scenario s = LoadScenario(ScenarioPath("city_street_grid.yaml"));
   EXPECT_THROW(ApplyOverride(s, "city.sidewalk_width_m", "2"), Error);
 }
 

@@ -39,7 +39,7 @@ TEST(ScenarioTest, LoadsEveryScenarioFile) {
 }
 
 TEST(ScenarioTest, DefaultCityFileHasTheDocumentedValues) {
-  const Scenario s = LoadScenario(ScenarioPath("city_two_pass.yaml"));
+  const Scenario s = LoadScenario(ScenarioPath("city_street_grid.yaml"));
   EXPECT_EQ(s.kind, "city");
   EXPECT_DOUBLE_EQ(s.city.route_length_m, 200);
   EXPECT_EQ(s.city.parked_cars, 20);
@@ -138,12 +138,12 @@ TEST(ScenarioTest, CityCameraOffsetKeepsTheCameraCarOnTheRoad) {
   // Offices have no lanes.
   EXPECT_EQ(ParseError("kind: office\npass2: {camera_offset_m: [0, -1.7, -1]}\n"), "");
   // An override is checked the same way, naming the scenario file.
-  Scenario s = LoadScenario(ScenarioPath("city_two_pass.yaml"));
+  Scenario s = LoadScenario(ScenarioPath("city_street_grid.yaml"));
   try {
     ApplyOverride(s, "pass2.camera_offset_m", "[0, -1.7, 0]");
     FAIL();
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("city_two_pass.yaml: pass2.camera_offset_m: y (to the left)"),
+    EXPECT_NE(std::string(e.what()).find("city_street_grid.yaml: pass2.camera_offset_m: y (to the left)"),
               std::string::npos)
         << e.what();
   }
@@ -209,7 +209,7 @@ TEST(ScenarioTest, BenchIsKeptVerbatimAndLeavesTheWorldAlone) {
 }
 
 TEST(ScenarioTest, ApplyOverrideSetsValuesWithTheSameChecks) {
-  Scenario s = LoadScenario(ScenarioPath("city_two_pass.yaml"));
+  Scenario s = LoadScenario(ScenarioPath("city_street_grid.yaml"));
   ApplyOverride(s, "city.moving_cars", "8");
   EXPECT_EQ(s.city.moving_cars, 8);
   EXPECT_EQ(s.city.parked_cars, 20);  // the rest is kept
@@ -218,7 +218,7 @@ TEST(ScenarioTest, ApplyOverrideSetsValuesWithTheSameChecks) {
   EXPECT_EQ(s.city.moving_cars, 8);  // earlier overrides survive
   ApplyOverride(s, "seed", "99");
   EXPECT_EQ(s.seed, 99u);
-  EXPECT_NE(s.source_file.string().find("city_two_pass.yaml"), std::string::npos);
+  EXPECT_NE(s.source_file.string().find("city_street_grid.yaml"), std::string::npos);
 
   try {
     ApplyOverride(s, "city.movng_cars", "8");
@@ -239,12 +239,12 @@ TEST(ScenarioTest, ApplyOverrideSetsValuesWithTheSameChecks) {
 }
 
 TEST(ScenarioTest, ApplyOverridesSplitsKeyAndValueAtTheFirstEquals) {
-  Scenario s = LoadScenario(ScenarioPath("city_two_pass.yaml"));
+  Scenario s = LoadScenario(ScenarioPath("city_street_grid.yaml"));
   ApplyOverrides(s, {"city.moving_cars=12", "pass2.camera_offset_m=[0, 2, 0]", "seed=5", "name=a-b"});
   EXPECT_EQ(s.name, "a-b");
   // The value is what follows the first '=': here a name that is refused whole.
   try {
-    Scenario other = LoadScenario(ScenarioPath("city_two_pass.yaml"));
+    Scenario other = LoadScenario(ScenarioPath("city_street_grid.yaml"));
     ApplyOverrides(other, {"name=a=b"});
     ADD_FAILURE() << "name a=b was taken";
   } catch (const Error& e) {
@@ -272,12 +272,12 @@ TEST(ScenarioTest, ApplyOverridesValidatesOnceAllAreSet) {
   for (const std::vector<std::string>& order :
        {std::vector<std::string>{"pass2.relocated_share=0.95", "pass2.removed_share=0"},
         std::vector<std::string>{"pass2.removed_share=0", "pass2.relocated_share=0.95"}}) {
-    Scenario s = LoadScenario(ScenarioPath("city_two_pass.yaml"));
+    Scenario s = LoadScenario(ScenarioPath("city_street_grid.yaml"));
     ApplyOverrides(s, order);
     EXPECT_DOUBLE_EQ(s.pass2.relocated_share, 0.95);
     EXPECT_DOUBLE_EQ(s.pass2.removed_share, 0.0);
   }
-  Scenario s = LoadScenario(ScenarioPath("city_two_pass.yaml"));
+  Scenario s = LoadScenario(ScenarioPath("city_street_grid.yaml"));
   try {
     ApplyOverrides(s, {"pass2.relocated_share=0.95", "pass2.removed_share=0.2"});
     FAIL() << "1.15 accepted";

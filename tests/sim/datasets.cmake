@@ -11,12 +11,12 @@ function(segslam_add_test_dataset NAME SCENARIO)
 endfunction()
 
 # Noise-free, with moving objects: re-projection, masks, tracks, pass-2 changes.
-segslam_add_test_dataset(city_clean scenarios/city_two_pass.yaml
+segslam_add_test_dataset(city_clean scenarios/city_street_grid.yaml
   --frames 40 --set sensor.enabled=false)
 segslam_add_test_dataset(office_clean scenarios/office_walking_xyz.yaml
   --frames 40 --set sensor.enabled=false)
 # Default sensor noise: the independent odometry and ORB texture checks.
-segslam_add_test_dataset(city_static scenarios/city_two_pass.yaml
+segslam_add_test_dataset(city_static scenarios/city_street_grid.yaml
   --frames 120 --set city.moving_cars=0 --set city.pedestrians=0)
 segslam_add_test_dataset(office_noisy scenarios/office_walking_xyz.yaml --frames 40)
 
@@ -29,7 +29,7 @@ target_compile_definitions(sim_dataset_tests PRIVATE
 
 # The segmentation refinement's acceptance (tests/seg/seg_eval_test.cpp): default sensor
 # noise, both passes of the city and the office with walking people.
-segslam_add_test_dataset(city_seg scenarios/city_two_pass.yaml --frames 80)
+segslam_add_test_dataset(city_seg scenarios/city_street_grid.yaml --frames 80)
 segslam_add_test_dataset(office_seg scenarios/office_walking_xyz.yaml --frames 80)
 
 # The SLAM core's checks (tests/harness/slam_run_test.cpp): a static office with the
