@@ -291,8 +291,27 @@ void ReadLoopSegmentationScores(const fs::path& seg_file, PassEvaluation* pass) 
   }
 }
 
+// Pass 1's ground truth and estimate: the map that pass 2 is scored against map-relatively.
+struct MapPass {
+  std::vector<StampedPose> ground_truth;
+  std::vector<StampedPose> estimate;  // T_wc in the map's frame
+};
+
+// The map-relative relocalization error of pass 2 over the frames the run processed.
+void ScoreMapRelative(const MapPass& map_pass, const std::vector<LoggedFrame>& frames,
+                      const std::vector<StampedPose>& ground_truth, const std::vector<StampedPose>& estimate,
+                      PassEvaluation* pass) {
+  std::vector<double> frame_stamps_s;
+  frame_stamps_s.reserve(frames.size());
+  for (const LoggedFrame& frame : frames) frame_stamps_s.push_back(frame.stamp_s);
+  pass->map_relative =
+      ComputeMapRelativeError(map_pass.ground_truth, map_pass.estimate, frame_stamps_s, ground_truth, estimate);
+}
+
+// `map_pass`: pass 1 where this is pass 2, scored map-relatively against it; else null.
 PassEvaluation EvaluatePass(const std::string& name, const fs::path& run_dir, const fs::path& sequence_dir,
-                            const std::optional<Eigen::Isometry3d>& fixed_alignment, bool in_map_frame = false) {
+                            const std::optional<Eigen::Isometry3d>& fixed_alignment, bool in_map_frame = false,
+                            const MapPass* map_pass = nullptr) {
   PassEvaluation pass;
   pass.name = name;
   pass.run_dir = run_dir;
@@ -322,11 +341,29 @@ PassEvaluation EvaluatePass(const std::string& name, const fs::path& run_dir, co
 
   ScoreAte(ground_truth, estimate, fixed_alignment, in_map_frame, &pass);
   ScoreRpe(ground_truth, estimate, &pass);
+  if (map_pass != nullptr) ScoreMapRelative(*map_pass, frames, ground_truth, estimate, &pass);
   ReadLoopSegmentationScores(run_dir / "seg.json", &pass);
 
   // Moving-object detection over judged instances (MovingDetectionScores).
   ScoreMovingDetection(frames, run_dir, sequence_dir, &pass);
   return pass;
+}
+
+// The map-relative error's summary (not its frames); null where there is none (pass 1).
+nlohmann::json MapRelativeJson(const std::optional<MapRelativeResult>& r) {
+  if (!r.has_value()) return nullptr;
+  return {{"place", "the pass-1 frame with an estimate whose ground-truth camera position is nearest"},
+          {"max_place_distance_m", r->options.max_place_distance_m},
+          {"within_translation_m", r->options.within_translation_m},
+          {"within_rotation_deg", r->options.within_rotation_deg},
+          {"frames_without_ground_truth", r->frames_without_ground_truth},
+          {"frames_without_place", r->frames_without_place},
+          {"frames_with_place", r->frames_with_place},
+          {"frames_unestimated", r->frames_unestimated},
+          {"frames_within", r->frames_within},
+          {"within_share", NumberJson(r->WithinShare())},
+          {"translation_m", StatisticsJson(r->translation_m)},
+          {"rotation_deg", StatisticsJson(r->rotation_deg)}};
 }
 
 std::string Fixed(const std::optional<ErrorStatistics>& s, double ErrorStatistics::*field, int decimals) {
@@ -335,6 +372,34 @@ std::string Fixed(const std::optional<ErrorStatistics>& s, double ErrorStatistic
 }
 
 std::string Percent(double value) { return std::isnan(value) ? "n/a" : fmt::format("{:.1f}", 100 * value); }
+
+// The map-relative relocalization error of the passes that have one (pass 2), as a
+// section of its own under the ATE table; "" when none has.
+std::string MapRelativeTable(const std::vector<PassEvaluation>& passes, size_t name_width) {
+  const auto has = [](const PassEvaluation& p) { return p.map_relative.has_value(); };
+  const auto first = std::find_if(passes.begin(), passes.end(), has);
+  if (first == passes.end()) return "";
+  const MapRelativeOptions& options = first->map_relative->options;
+  std::string text = fmt::format(
+      "\nMap-relative relocalization error: each frame's pose against pass 1's estimate at the nearest pass-1 place "
+      "(pass 1's own error drops out); places within {:g} m; within: <= {:g} m and <= {:g} deg, a frame without "
+      "a pose is not within\n"
+      "{:<{}} {:>8} {:>8} {:>8} | {:>8} {:>8} {:>8} | {:>8} {:>8} | {:>8}\n"
+      "{:<{}} {:>8} {:>8} {:>8} | {:^26} | {:^17} | {:>8}\n",
+      options.max_place_distance_m, options.within_translation_m, options.within_rotation_deg, "sequence", name_width,
+      "placed", "no pose", "no place", "rmse", "median", "max", "rmse", "max", "within", "", name_width, "", "", "",
+      "translation [m]", "rotation [deg]", "%");
+  for (const PassEvaluation& p : passes) {
+    if (!p.map_relative.has_value()) continue;
+    const MapRelativeResult& r = *p.map_relative;
+    text += fmt::format("{:<{}} {:>8} {:>8} {:>8} | {:>8} {:>8} {:>8} | {:>8} {:>8} | {:>8}\n", p.name, name_width,
+                        r.frames_with_place, r.frames_unestimated, r.frames_without_place + r.frames_without_ground_truth,
+                        Fixed(r.translation_m, &ErrorStatistics::rmse, 4), Fixed(r.translation_m, &ErrorStatistics::median, 4),
+                        Fixed(r.translation_m, &ErrorStatistics::max, 4), Fixed(r.rotation_deg, &ErrorStatistics::rmse, 3),
+                        Fixed(r.rotation_deg, &ErrorStatistics::max, 3), Percent(r.WithinShare()));
+  }
+  return text;
+}
 
 }  // namespace
 
@@ -372,6 +437,7 @@ nlohmann::json PassEvaluation::ToJson() const {
       {"rpe",
        {{"delta", 1}, {"delta_unit", "s"}, {"translation_m", StatisticsJson(rpe_translation_m)},
         {"rotation_deg", StatisticsJson(rpe_rotation_deg)}}},
+      {"map_relative", MapRelativeJson(map_relative)},
       {"segmentation", nullptr},
       {"moving_detection", nullptr},
       {"metrics", nlohmann::json::object()}};
@@ -432,6 +498,8 @@ std::string RunEvaluation::Table() const {
     if (!p.rpe_translation_m.has_value()) text += fmt::format("{}: no RPE: {}\n", p.name, p.rpe_missing_reason);
   }
 
+  text += MapRelativeTable(passes, name_width);
+
   const bool any_seg = std::any_of(passes.begin(), passes.end(), [](const auto& p) { return p.seg_raw.has_value(); });
   if (any_seg) {
     text += fmt::format("\nSegmentation in the loop (percent)\n{:<{}} | {:>6} {:>6} {:>6} | {:>6} {:>6} {:>6}\n",
@@ -489,8 +557,11 @@ RunEvaluation EvaluateRun(const fs::path& run_dir, const fs::path& dataset) {
     evaluation.passes.push_back(EvaluatePass("pass1", run_dir / "pass1", dataset / "pass1", std::nullopt));
     std::optional<Eigen::Isometry3d> alignment;
     if (evaluation.passes[0].ate_m.has_value()) alignment = evaluation.passes[0].T_gt_est;
+    // Pass 1's files were read and checked by its evaluation above.
+    const MapPass map_pass{ReadTumTrajectory(dataset / "pass1" / "groundtruth.txt"),
+                           ReadTumTrajectory(run_dir / "pass1" / "trajectory.txt")};
     evaluation.passes.push_back(
-        EvaluatePass("pass2", run_dir / "pass2", dataset / "pass2", alignment, /*in_map_frame=*/true));
+        EvaluatePass("pass2", run_dir / "pass2", dataset / "pass2", alignment, /*in_map_frame=*/true, &map_pass));
   } else {
     evaluation.passes.push_back(EvaluatePass(dataset.filename().string(), run_dir, dataset, std::nullopt));
   }
@@ -499,11 +570,12 @@ RunEvaluation EvaluateRun(const fs::path& run_dir, const fs::path& dataset) {
 
 const std::vector<std::string>& PassMetricNames() {
   static const std::vector<std::string> names = {
-      "ate_rmse_m",       "ate_mean_m",      "ate_median_m",     "ate_std_m",        "ate_min_m",
-      "ate_max_m",        "rpe_trans_rmse_m", "rpe_rot_rmse_deg", "localized_share",  "seg_raw_map",
-      "seg_raw_ap50",     "seg_raw_miou",    "seg_refined_map",  "seg_refined_ap50", "seg_refined_miou",
-      "moving_precision", "moving_recall",   "moving_coverage",  "moving_feature_share_mean",
-      "moving_feature_share_max"};
+      "ate_rmse_m",         "ate_mean_m",         "ate_median_m",       "ate_std_m",
+      "ate_min_m",          "ate_max_m",          "rpe_trans_rmse_m",   "rpe_rot_rmse_deg",
+      "localized_share",    "reloc_trans_rmse_m", "reloc_rot_rmse_deg", "reloc_within_share",
+      "seg_raw_map",        "seg_raw_ap50",       "seg_raw_miou",       "seg_refined_map",
+      "seg_refined_ap50",   "seg_refined_miou",   "moving_precision",   "moving_recall",
+      "moving_coverage",    "moving_feature_share_mean",                "moving_feature_share_max"};
   return names;
 }
 
@@ -521,6 +593,11 @@ std::map<std::string, double> PassMetrics(const PassEvaluation& pass) {
   if (pass.rpe_translation_m.has_value()) metrics["rpe_trans_rmse_m"] = pass.rpe_translation_m->rmse;
   if (pass.rpe_rotation_deg.has_value()) metrics["rpe_rot_rmse_deg"] = pass.rpe_rotation_deg->rmse;
   metrics["localized_share"] = pass.LocalizedShare();
+  if (pass.map_relative.has_value()) {
+    if (pass.map_relative->translation_m.has_value()) metrics["reloc_trans_rmse_m"] = pass.map_relative->translation_m->rmse;
+    if (pass.map_relative->rotation_deg.has_value()) metrics["reloc_rot_rmse_deg"] = pass.map_relative->rotation_deg->rmse;
+    metrics["reloc_within_share"] = pass.map_relative->WithinShare();
+  }
   if (pass.seg_raw.has_value()) {
     metrics["seg_raw_map"] = pass.seg_raw->mAP;
     metrics["seg_raw_ap50"] = pass.seg_raw->AP50;

@@ -9,6 +9,9 @@
 // - RPE per second (evaluate_rpe.py --fixed_delta --delta 1 --delta_unit s), translation
 //   in metres and rotation in degrees; absent when the sequence is shorter than the
 //   delta (the reason is kept).
+// - Pass 2 only: the map-relative relocalization error, each pass-2 pose against pass 1's
+//   estimate at the nearest pass-1 place (harness/map_relative_error.h). Unlike the ATE
+//   in the map frame it does not include pass 1's own error: it isolates relocalization.
 // - The share of frames localized, from frames.jsonl: tracked, and on a pass run on a
 //   loaded map, matched to that map (slam::FrameResult::localized_on_map()); a frame
 //   tracked only on the points the run made itself does not count.
@@ -28,6 +31,7 @@
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 
+#include "harness/map_relative_error.h"
 #include "harness/trajectory_metrics.h"
 
 namespace segslam::harness {
@@ -91,6 +95,10 @@ struct PassEvaluation {
   std::optional<ErrorStatistics> rpe_rotation_deg;     // per second
   std::string rpe_missing_reason;
 
+  // Pass 2 of a two-pass run only (absent elsewhere): against pass 1's estimate at the
+  // same place (harness/map_relative_error.h).
+  std::optional<MapRelativeResult> map_relative;
+
   std::optional<MaskScores> seg_raw, seg_refined;      // from seg.json
   std::string segmenter;                               // seg.json's segmenter
 
@@ -109,7 +117,8 @@ struct RunEvaluation {
   std::vector<PassEvaluation> passes;
 
   nlohmann::json ToJson() const;
-  // A readable table of every pass (ATE, RPE, localization, segmentation, moving objects).
+  // A readable table of every pass (ATE, RPE, localization, map-relative relocalization
+  // error, segmentation, moving objects).
   std::string Table() const;
 };
 
@@ -125,6 +134,11 @@ RunEvaluation EvaluateRun(const std::filesystem::path& run_dir, const std::files
 //   ate_rmse_m ate_mean_m ate_median_m ate_std_m ate_min_m ate_max_m
 //   rpe_trans_rmse_m rpe_rot_rmse_deg          (per second)
 //   localized_share
+//   reloc_trans_rmse_m reloc_rot_rmse_deg reloc_within_share
+//                                              (pass 2 only, map-relative: MapRelativeResult;
+//                                               rmse over frames with a place and a pose,
+//                                               within share over frames with a place, a
+//                                               frame without a pose counting as not within)
 //   seg_raw_map seg_raw_ap50 seg_raw_miou seg_refined_map seg_refined_ap50 seg_refined_miou
 //   moving_precision moving_recall moving_coverage
 //   moving_feature_share_mean moving_feature_share_max   (MovingDetectionScores)

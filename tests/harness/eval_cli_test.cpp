@@ -79,6 +79,15 @@ TEST_F(EvalCliTest, GivesTheAteThatRunPrinted) {
     EXPECT_TRUE(pass["moving_detection"].is_object());
   }
   EXPECT_NE(eval.stdout_text.find("map frame"), std::string::npos);
+  // Pass 2 is also scored against pass 1's estimate at the same place (map-relative).
+  EXPECT_TRUE(json["passes"][0]["map_relative"].is_null());
+  const nlohmann::json& map_relative = json["passes"][1]["map_relative"];
+  ASSERT_TRUE(map_relative.is_object()) << json["passes"][1].dump(2);
+  EXPECT_EQ(map_relative["frames_with_place"].get<int>() + map_relative["frames_without_place"].get<int>() +
+                map_relative["frames_without_ground_truth"].get<int>(),
+            json["passes"][1]["frames"].get<int>());
+  EXPECT_EQ(json["passes"][1]["metrics"]["reloc_within_share"], map_relative["within_share"]);
+  EXPECT_NE(eval.stdout_text.find("Map-relative relocalization error"), std::string::npos);
 }
 
 TEST_F(EvalCliTest, DatasetWithoutGroundTruthIsOneLine) {

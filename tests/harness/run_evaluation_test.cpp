@@ -154,6 +154,79 @@ TEST_F(RunEvaluationTest, PassTwoHasNoAteWithoutPassOnesAlignment) {
   EXPECT_TRUE(std::isnan(PassMetrics(evaluation.passes[1]).at("ate_rmse_m")));
 }
 
+// Pass 1 drifts (its map bends away from the ground truth along the route) and pass 2
+// relocalizes on that map perfectly: the ATE in the map's frame counts the map's error,
+// the map-relative error does not. Three pass-2 frames are lost: not within.
+TEST_F(RunEvaluationTest, PassTwoIsScoredMapRelativelyToPassOnesEstimate) {
+  // A straight route, pass 2 0.1 m beside it: pass-2 frame i's nearest pass-1 frame is i.
+  const auto route = [](double lateral_m) {
+    std::vector<StampedPose> poses;
+    for (int i = 0; i < kFrames; ++i) {
+      Eigen::Isometry3d T_wc = Eigen::Isometry3d::Identity();
+      T_wc.linear() = Eigen::AngleAxisd(0.01 * i, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+      T_wc.translation() = Eigen::Vector3d(0.3 * i, lateral_m, 1.5);
+      poses.push_back({100 + i * kFrameIntervalS, T_wc});
+    }
+    return poses;
+  };
+  // The map's error at frame i, in the world: a yaw and a sideways shift that grow.
+  const auto drift = [](int i) {
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = Eigen::AngleAxisd(0.005 * i, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    T.translation() = Eigen::Vector3d(0, 0.01 * i, 0);
+    return T;
+  };
+  const std::vector<StampedPose> truth1 = route(0), truth2 = route(0.1);
+  std::vector<StampedPose> estimate1 = truth1, estimate2;
+  for (int i = 0; i < kFrames; ++i) {
+    estimate1[i].T_wc = drift(i) * truth1[i].T_wc;
+    if (i < 10 || i > 12) estimate2.push_back({truth2[i].stamp_s, drift(i) * truth2[i].T_wc});
+  }
+  WriteSequence(dir_ / "data" / "pass1", truth1);
+  WriteSequence(dir_ / "data" / "pass2", truth2);
+  WriteRun(dir_ / "run" / "pass1", estimate1, "");
+  WriteRun(dir_ / "run" / "pass2", estimate2, "");
+  std::ofstream frames(dir_ / "run" / "pass2" / "frames.jsonl");  // every frame, 10 to 12 lost
+  for (int i = 0; i < kFrames; ++i) {
+    frames << "{\"frame\": " << i << ", \"stamp\": " << std::fixed << truth2[i].stamp_s << ", \"status\": \""
+           << (i >= 10 && i <= 12 ? "lost" : "tracking") << "\", \"instances\": []}\n";
+  }
+  frames.close();
+
+  const RunEvaluation evaluation = EvaluateRun(dir_ / "run", dir_ / "data");
+  ASSERT_EQ(evaluation.passes.size(), 2u);
+  const PassEvaluation& pass2 = evaluation.passes[1];
+  EXPECT_FALSE(evaluation.passes[0].map_relative.has_value());
+  ASSERT_TRUE(pass2.map_relative.has_value());
+  ASSERT_TRUE(pass2.ate_m.has_value());
+  EXPECT_GT(pass2.ate_m->rmse, 0.05);  // the map's error, which Horn's alignment of pass 1 cannot remove
+  const std::map<std::string, double> metrics = PassMetrics(pass2);
+  EXPECT_LT(metrics.at("reloc_trans_rmse_m"), 1e-6);
+  EXPECT_LT(metrics.at("reloc_rot_rmse_deg"), 1e-4);
+  EXPECT_DOUBLE_EQ(metrics.at("reloc_within_share"), (kFrames - 3.0) / kFrames);
+  EXPECT_TRUE(std::isnan(PassMetrics(evaluation.passes[0]).at("reloc_within_share")));
+
+  const nlohmann::json json = evaluation.ToJson();
+  EXPECT_TRUE(json["passes"][0]["map_relative"].is_null());
+  EXPECT_EQ(json["passes"][1]["map_relative"]["frames_with_place"], kFrames);
+  EXPECT_EQ(json["passes"][1]["map_relative"]["frames_unestimated"], 3);
+  EXPECT_EQ(json["passes"][1]["map_relative"]["frames_without_place"], 0);
+  EXPECT_TRUE(json["passes"][1]["metrics"].contains("reloc_trans_rmse_m"));
+  const std::string table = evaluation.Table();
+  EXPECT_NE(table.find("Map-relative relocalization error"), std::string::npos) << table;
+  EXPECT_NE(table.find("90.3"), std::string::npos) << table;  // 28 of 31 within
+  // The section's header lines and its row line up.
+  std::istringstream lines(table.substr(table.find("Map-relative relocalization error")));
+  std::vector<std::string> section;
+  for (std::string line; std::getline(lines, line) && section.size() < 4;) section.push_back(line);
+  ASSERT_EQ(section.size(), 4u);
+  EXPECT_EQ(section[3].rfind("pass2 ", 0), 0u) << table;
+  for (int i : {2, 3}) {
+    EXPECT_EQ(section[i].find('|'), section[1].find('|')) << table;
+    EXPECT_EQ(section[i].rfind('|'), section[1].rfind('|')) << table;
+  }
+}
+
 // A real sequence's folder name is longer than "pass1"; the columns still line up.
 TEST(RunEvaluationTableTest, ColumnsLineUpUnderALongSequenceName) {
   RunEvaluation evaluation;

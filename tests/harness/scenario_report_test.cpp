@@ -43,6 +43,31 @@ TEST(ScenarioReportTest, MetricNamesFollowTheScheme) {
   EXPECT_EQ(name.metric, "rpe_trans_rmse_m");
 }
 
+// Pass 2's map-relative relocalization error (harness/map_relative_error.h) is a metric
+// like any other, and Table III shows it beside the ATE in the map frame.
+TEST(ScenarioReportTest, MapRelativeErrorIsAMetricAndInTableThree) {
+  const MetricName within = ParseMetricName("pass2.mutual.reloc_within_share", kModes, "s.yaml");
+  EXPECT_EQ(within.pass, "pass2");
+  EXPECT_EQ(within.metric, "reloc_within_share");
+  EXPECT_EQ(ParseMetricName("pass2.mutual_vs_plain.reloc_trans_rmse_m_ratio", kModes, "s.yaml").metric,
+            "reloc_trans_rmse_m");
+  EXPECT_EQ(ParseMetricName("pass2.mutual.reloc_rot_rmse_deg", kModes, "s.yaml").metric, "reloc_rot_rmse_deg");
+
+  ScenarioReport report;
+  report.scenario_name = "route";
+  report.bench.modes = {"plain", "mutual"};
+  report.spreads["pass2"]["mutual"]["ate_rmse_m"] = SpreadOf({0.5});
+  report.spreads["pass2"]["mutual"]["reloc_trans_rmse_m"] = SpreadOf({0.0123});
+  report.spreads["pass2"]["mutual"]["reloc_rot_rmse_deg"] = SpreadOf({0.456});
+  report.spreads["pass2"]["mutual"]["reloc_within_share"] = SpreadOf({0.875});
+  const std::string markdown = report.ToMarkdown();
+  const std::size_t table = markdown.find("Relocalization in pass 2");
+  ASSERT_NE(table, std::string::npos) << markdown;
+  EXPECT_NE(markdown.find("map-relative rmse", table), std::string::npos) << markdown.substr(table);
+  EXPECT_NE(markdown.find("| mutual | n/a | 0.5000 | n/a | 0.0123 | 0.456 | 87.5 |", table), std::string::npos)
+      << markdown.substr(table);
+}
+
 TEST(ScenarioReportTest, UnknownMetricNamesAreRefused) {
   EXPECT_NE(ParseError("mutual.ate").find("s.yaml: expect: unknown metric 'mutual.ate'"), std::string::npos);
   EXPECT_NE(ParseError("pass3.mutual.ate_rmse_m").find("'pass3' is not pass1 or pass2"), std::string::npos);
