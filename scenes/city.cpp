@@ -6,14 +6,19 @@
 // sidewalks are raised by kCurbHeightM.
 #include "scenes/builder.h"
 #include "scenes/city_layout.h"
+#include "scenes/city_textures.h"
+#include "scenes/picture_pages.h"
 #include "scenes/person.h"
 #include "scenes/textures.h"
+
 
 #include <algorithm>
 #include <array>
 #include <cassert>
 #include <cmath>
 #include <functional>
+#include <limits>
+#include <memory>
 #include <optional>
 #include <set>
 #include <stdexcept>
@@ -29,10 +34,15 @@ constexpr double kSlotLengthM = 6.5;
 constexpr double kParkedGapM = 0.3;    // least gap between parked vehicles, bumper to bumper
 // Vehicle footprints and the street's cross-section (scenes/city_layout.h).
 using namespace city_layout;
-constexpr double kGroundFloorM = 4.2;  // shop floor height
-constexpr double kFloorM = 3.2;        // upper floor height
-constexpr double kBayM = 3.3;          // window bay width
-constexpr int kFacadeFloors = 3, kFacadeBays = 4;
+// Texture detail of the surfaces of one place (street, sidewalk strip, facade): full
+// within kNearRouteM of the camera's lane, where the camera sees them from a few metres,
+// coarse beyond, where it sees them only from afar. Every surface has its own picture
+// either way (scenes/city_textures.h).
+constexpr double kNearRouteM = 45.0;
+constexpr double kNearPxPerM = 32.0, kFarGroundPxPerM = 8.0, kFarFacadePxPerM = 10.0;
+constexpr int kMaxTexturePx = 2040;    // longest side of one surface's picture (a page, less gutters)
+constexpr double kRoadTopM = 0.004;    // street surfaces lie on the ground plane
+constexpr double kFacadeSkinM = 0.03;  // half thickness of a facade's textured skin
 constexpr double kStopLineM = 4.0;          // stop line, before the edge of the crossing road
 constexpr double kQueueGapM = 2.0;          // bumper to bumper, standing in a queue
 constexpr double kCarAccelMps2 = 2.0;       // braking and pulling away at a red light
@@ -59,8 +69,7 @@ struct Edge {
 
 // Materials and textures the city uses, by role.
 struct CityLook {
-  std::vector<int> facades, shopfronts;  // materials
-  int asphalt, sidewalk, concrete, crosswalk, paint, bark, metal, dark_metal, plate, glass;
+  int ground, bark, metal, dark_metal, glass, railing;
   int car_paint_texture, clothes_textures[6], skin_texture;
   int rubber, chrome, headlight, taillight, stop_sign, traffic_lamps, wood, red_paint;
   std::vector<int> foliage;
@@ -93,6 +102,7 @@ class CityBuilder {
     MakeGround();
     MakeBlocks();
     MakeStreets();
+    MakeStreetSurfaces();
     MakeCameraRoutes();
     MakeSamples();
     MakeParkedCars();
@@ -106,6 +116,7 @@ class CityBuilder {
       MakePedestrians(Traffic{});
     }
     MakeLights();
+    pictures_.Pack(&world_);
     return std::move(world_);
   }
 
@@ -117,6 +128,31 @@ class CityBuilder {
   }
 
   // ---- Textures and materials ------------------------------------------------------
+  // A picture of one place (a street, a facade, a plate) drawn at `px_per_m` over a
+  // box face of `size_m`; returns its material. The pictures are packed into a few
+  // textures and drawn, in parallel, at the end of Build() (scenes/picture_pages.h).
+  int AddPicture(const std::string& name, const Vec2& size_m, double px_per_m, std::function<cv::Mat()> draw) {
+    const cv::Size size_px(std::max(2, static_cast<int>(std::lround(size_m.x() * px_per_m))),
+                           std::max(2, static_cast<int>(std::lround(size_m.y() * px_per_m))));
+    return pictures_.Add(b_, name, size_px, size_m, std::move(draw));
+  }
+  // A picture drawn at a fixed size in pixels (plates, signs).
+  int AddPicture(const std::string& name, const Vec2& size_m, cv::Size size_px, std::function<cv::Mat()> draw) {
+    return pictures_.Add(b_, name, size_px, size_m, std::move(draw));
+  }
+
+  // Pixels per metre for a surface spanning [lo, hi] (horizontal extent): full detail
+  // near the route, coarse beyond, and never more than kMaxTexturePx on a side.
+  double DetailPxPerM(const Vec2& lo, const Vec2& hi, double far_px_per_m, double longest_side_m) const {
+    double nearest = std::numeric_limits<double>::infinity();
+    for (std::size_t k = 0; k < lane_pts_.size(); k += 4) {  // every metre
+      const Vec2 q = lane_pts_[k].cwiseMax(lo).cwiseMin(hi);
+      nearest = std::min(nearest, (lane_pts_[k] - q).norm());
+    }
+    const double px_per_m = nearest <= kNearRouteM ? kNearPxPerM : far_px_per_m;
+    return std::min(px_per_m, kMaxTexturePx / std::max(longest_side_m, 1e-3));
+  }
+
   void MakeLook() {
     const std::uint64_t seed = s_.seed;
     auto tex = [&](const std::string& name, cv::Mat img, double u, double v) {
@@ -126,29 +162,13 @@ class CityBuilder {
       return b_.AddMaterial(name, t, rgba, spec);
     };
     const Eigen::Vector4f white(1, 1, 1, 1);
-    const FacadeStyle styles[4] = {FacadeStyle::kBrick, FacadeStyle::kConcrete, FacadeStyle::kGlass,
-                                   FacadeStyle::kPlaster};
-    for (int i = 0; i < 8; ++i) {
-      const int t = tex("facade_" + std::to_string(i),
-                        FacadeTexture(SubSeed(seed, "facade", i), styles[i % 4], kFacadeFloors, kFacadeBays),
-                        kFacadeBays * kBayM, kFacadeFloors * kFloorM);
-      facade_textures_.push_back(t);
-    }
-    for (int i = 0; i < 4; ++i) {
-      const int t = tex("shopfront_" + std::to_string(i), ShopfrontTexture(SubSeed(seed, "shop", i)),
-                        kFacadeBays * kBayM, kGroundFloorM);
-      shop_textures_.push_back(t);
-    }
-    look_.asphalt = mat("asphalt", tex("asphalt", AsphaltTexture(SubSeed(seed, "asphalt")), 5, 5), white, 0.05f);
-    look_.sidewalk = mat("sidewalk", tex("sidewalk", SidewalkTexture(SubSeed(seed, "sidewalk")), 3, 3), white);
-    look_.concrete = mat("concrete", tex("concrete", ConcreteTexture(SubSeed(seed, "concrete")), 2, 2), white);
-    look_.crosswalk = mat("crosswalk", tex("crosswalk", CrosswalkTexture(SubSeed(seed, "crosswalk")), 1.0, 3.0), white);
-    look_.paint = mat("road_paint", tex("road_paint", PaintTexture(SubSeed(seed, "paint")), 1, 1), white);
+    // Untextured asphalt beyond the streets' surfaces, which have pictures of their own.
+    look_.ground = mat("ground", -1, Eigen::Vector4f(0.29f, 0.29f, 0.3f, 1), 0.05f);
+    look_.railing = mat("railing", -1, Eigen::Vector4f(0.16f, 0.17f, 0.17f, 1), 0.3f);
     look_.bark = mat("bark", tex("bark", BarkTexture(SubSeed(seed, "bark")), 1, 1), white);
     const int metal_t = tex("metal", MetalTexture(SubSeed(seed, "metal")), 0.5, 0.5);
     look_.metal = mat("metal", metal_t, Eigen::Vector4f(0.75f, 0.78f, 0.78f, 1), 0.4f);
     look_.dark_metal = mat("dark_metal", metal_t, Eigen::Vector4f(0.3f, 0.32f, 0.3f, 1), 0.4f);
-    look_.plate = mat("plate", tex("plate", PlateTexture(SubSeed(seed, "plate")), 0.52, 0.13), white);
     look_.glass = mat("car_glass", tex("car_glass", CarGlassTexture(SubSeed(seed, "glass")), 1.2, 0.5), white, 0.6f);
     look_.car_paint_texture = tex("car_paint", CarPaintTexture(SubSeed(seed, "carpaint")), 2.0, 2.0);
     for (int i = 0; i < 6; ++i) {
@@ -374,7 +394,8 @@ class CityBuilder {
 
   // ---- Static scenery ----------------------------------------------------------------
   void MakeGround() {
-    // The asphalt plane under everything; streets are what sidewalks do not cover.
+    // An untextured plane under everything; the streets' surfaces lie on it
+    // (MakeStreetSurfaces) and the sidewalks and buildings stand on it.
     const double margin = 2.5 * block_;
     const Vec2 lo = Vec2((imin_ - 1) * block_ - margin, (jmin_ - 1) * block_ - margin);
     const Vec2 hi = Vec2((imax_ + 1) * block_ + margin, (jmax_ + 1) * block_ + margin);
@@ -382,8 +403,39 @@ class CityBuilder {
     g.shape = Shape::kPlane;
     g.size = Vec3(0.5 * (hi.x() - lo.x()), 0.5 * (hi.y() - lo.y()), 0);
     g.T_parent_geom.translation() = At(0.5 * (lo + hi), 0);
-    g.material = look_.asphalt;
+    g.material = look_.ground;
     world_.static_geoms.push_back(g);
+  }
+
+  // Every street between two intersections and every intersection of the blocks' grid a
+  // slab of its own asphalt, with the markings that lie on it painted in.
+  void MakeStreetSurfaces() {
+    const auto add = [&](const Vec2& lo, const Vec2& hi, const std::string& tag, std::uint64_t index) {
+      GroundPatch patch;
+      patch.lo_m = lo;
+      patch.hi_m = hi;
+      patch.px_per_m = DetailPxPerM(lo, hi, kFarGroundPxPerM, (hi - lo).maxCoeff());
+      std::vector<RoadMarking> on_patch;
+      for (const RoadMarking& m : markings_) {
+        const double reach = m.half_m.norm();
+        if ((m.centre_m.array() + reach > lo.array()).all() && (m.centre_m.array() - reach < hi.array()).all()) {
+          on_patch.push_back(m);
+        }
+      }
+      const std::uint64_t seed = SubSeed(s_.seed, tag, index);
+      const int m = AddPicture(tag, hi - lo, patch.SizePx(), [seed, patch, on_patch] { return StreetTexture(seed, patch, on_patch); });
+      world_.static_geoms.push_back(MakeBox(At(0.5 * (lo + hi), kRoadTopM / 2), At(0.5 * (hi - lo), kRoadTopM / 2), m));
+    };
+    const Vec2 half_road = Vec2::Constant(road_ / 2);
+    for (int i = imin_ - 1; i <= imax_ + 1; ++i) {
+      for (int j = jmin_ - 1; j <= jmax_ + 1; ++j) {
+        const std::uint64_t index = static_cast<std::uint64_t>((i + 1000) * 4096 + (j + 1000));
+        const Vec2 c = NodePos({i, j});
+        add(c - half_road, c + half_road, "intersection", index);
+        if (i <= imax_) add(c + Vec2(road_ / 2, -road_ / 2), NodePos({i + 1, j}) + Vec2(-road_ / 2, road_ / 2), "street_x", index);
+        if (j <= jmax_) add(c + Vec2(-road_ / 2, road_ / 2), NodePos({i, j + 1}) + Vec2(road_ / 2, -road_ / 2), "street_y", index);
+      }
+    }
   }
 
   // A block between street lines i..i+1 and j..j+1: a raised sidewalk slab and
@@ -394,8 +446,8 @@ class CityBuilder {
         std::mt19937_64 rng = Rng("block", static_cast<std::uint64_t>((i + 1000) * 4096 + (j + 1000)));
         const Vec2 lo = NodePos({i, j}) + Vec2::Constant(road_ / 2);
         const Vec2 hi = NodePos({i + 1, j + 1}) - Vec2::Constant(road_ / 2);
-        world_.static_geoms.push_back(MakeBox(At(0.5 * (lo + hi), kCurbHeightM / 2),
-                                              At(0.5 * (hi - lo), kCurbHeightM / 2), look_.sidewalk));
+        const std::uint64_t block_index = static_cast<std::uint64_t>((i + 1000) * 4096 + (j + 1000));
+        MakeSidewalks(lo, hi, block_index, Uniform(rng, 0.3, 0.6));
         // Lots: 2-3 columns by 2 rows, all touching a street.
         const Vec2 in_lo = lo + Vec2::Constant(walk_), in_hi = hi - Vec2::Constant(walk_);
         const int nx = UniformInt(rng, 2, 3);
@@ -406,38 +458,124 @@ class CityBuilder {
         xs.push_back(in_hi.x());
         for (int a = 0; a + 1 < static_cast<int>(xs.size()); ++a) {
           for (int c = 0; c < 2; ++c) {
-            MakeBuilding(rng, Vec2(xs[a], ys[c]), Vec2(xs[a + 1], ys[c + 1]));
+            // The sides of the lot on the block's edge face a street.
+            const std::array<bool, 4> street_sides = {a == 0, a + 2 == static_cast<int>(xs.size()), c == 0, c == 1};
+            MakeBuilding(rng, Vec2(xs[a], ys[c]), Vec2(xs[a + 1], ys[c + 1]), street_sides);
           }
         }
       }
     }
   }
 
-  void MakeBuilding(std::mt19937_64& rng, Vec2 lo, Vec2 hi) {
+  // The sidewalks of the block [lo, hi]: four paved strips along its edges, each with a
+  // picture of its own, around an untextured slab under the lots.
+  void MakeSidewalks(const Vec2& lo, const Vec2& hi, std::uint64_t block_index, double paver_m) {
+    const Vec2 w = Vec2::Constant(walk_);
+    // Four strips, none overlapping: along x the whole block, along y between them.
+    const std::array<std::pair<Vec2, Vec2>, 4> strips = {{
+        {lo, Vec2(hi.x(), lo.y() + walk_)},                             // along x, low y
+        {Vec2(lo.x(), hi.y() - walk_), hi},                             // along x, high y
+        {Vec2(lo.x(), lo.y() + walk_), Vec2(lo.x() + walk_, hi.y() - walk_)},  // along y, low x
+        {Vec2(hi.x() - walk_, lo.y() + walk_), Vec2(hi.x(), hi.y() - walk_)},  // along y, high x
+    }};
+    for (std::size_t k = 0; k < strips.size(); ++k) {
+      const auto& [a, b] = strips[k];
+      GroundPatch patch;
+      patch.lo_m = a;
+      patch.hi_m = b;
+      patch.px_per_m = DetailPxPerM(a, b, kFarGroundPxPerM, (b - a).maxCoeff());
+      const std::uint64_t seed = SubSeed(s_.seed, "sidewalk", block_index * 4 + k);
+      const int m = AddPicture("sidewalk", b - a, patch.SizePx(), [seed, patch, paver_m] { return PavedStripTexture(seed, patch, paver_m); });
+      world_.static_geoms.push_back(MakeBox(At(0.5 * (a + b), kCurbHeightM / 2), At(0.5 * (b - a), kCurbHeightM / 2), m));
+    }
+    const int inner = b_.AddMaterial("lot_ground", -1, Eigen::Vector4f(0.55f, 0.55f, 0.53f, 1));
+    world_.static_geoms.push_back(MakeBox(At(0.5 * (lo + hi), kCurbHeightM / 2), At(0.5 * (hi - lo) - w, kCurbHeightM / 2), inner));
+  }
+
+  // A building on the lot [lo, hi]: an untextured body in its own colour; each side that
+  // faces a street (street_sides: low x, high x, low y, high y) carries a facade of its
+  // own (floors, bays, windows, shops with their own names), with balconies and awnings
+  // where that facade has them; a cornice and now and then a rooftop structure.
+  void MakeBuilding(std::mt19937_64& rng, Vec2 lo, Vec2 hi, const std::array<bool, 4>& street_sides) {
     // Occasional setback from the street and narrow gaps between neighbours.
     const double setback = Chance(rng, 0.25) ? Uniform(rng, 0.3, 1.5) : 0.0;
     lo += Vec2::Constant(setback * 0.5 + 0.1);
     hi -= Vec2::Constant(setback * 0.5 + 0.1);
     const double height = Chance(rng, 0.3) ? Uniform(rng, 22, 40) : Uniform(rng, 8, 22);
     const Vec2 c = 0.5 * (lo + hi), half = 0.5 * (hi - lo);
-    // Each building its own facade and tint, so neighbours look different.
-    const int facade_t = facade_textures_[UniformInt(rng, 0, static_cast<int>(facade_textures_.size()) - 1)];
-    const float tint = static_cast<float>(Uniform(rng, 0.8, 1.0));
-    const int facade = b_.AddMaterial("building_facade", facade_t,
-                                      Eigen::Vector4f(tint, tint * static_cast<float>(Uniform(rng, 0.93, 1.0)), tint, 1));
-    const int shop_t = shop_textures_[UniformInt(rng, 0, static_cast<int>(shop_textures_.size()) - 1)];
+    const FacadeStyle styles[4] = {FacadeStyle::kBrick, FacadeStyle::kConcrete, FacadeStyle::kGlass, FacadeStyle::kPlaster};
+    const FacadeStyle style = styles[UniformInt(rng, 0, 3)];
     const bool shops = Chance(rng, 0.7);
+    const std::uint64_t building_seed = SubSeed(s_.seed, "building", building_count_++);
     const double z0 = kCurbHeightM;
-    if (shops) {
-      const int shop = b_.AddMaterial("building_shops", shop_t, Eigen::Vector4f(1, 1, 1, 1));
-      world_.static_geoms.push_back(MakeBox(At(c, z0 + kGroundFloorM / 2), At(half, kGroundFloorM / 2), shop));
-      world_.static_geoms.push_back(MakeBox(At(c, z0 + kGroundFloorM + (height - kGroundFloorM) / 2),
-                                            At(half - Vec2::Constant(0.05), (height - kGroundFloorM) / 2), facade));
-    } else {
-      world_.static_geoms.push_back(MakeBox(At(c, z0 + height / 2), At(half, height / 2), facade));
+    // The facades' layouts first: the body takes the colour of their walls.
+    const Vec2 normals[4] = {Vec2(-1, 0), Vec2(1, 0), Vec2(0, -1), Vec2(0, 1)};
+    std::vector<std::pair<int, FacadeLayout>> faces;
+    for (int side = 0; side < 4; ++side) {
+      if (!street_sides[side]) continue;
+      const double width = side < 2 ? 2 * half.y() : 2 * half.x();
+      faces.emplace_back(side, PlanFacade(building_seed, side, width, height, style, shops));
     }
-    // A roof edge that breaks the silhouette.
-    world_.static_geoms.push_back(MakeBox(At(c, z0 + height + 0.4), At(half + Vec2::Constant(0.15), 0.4), look_.concrete));
+    const cv::Scalar wall = faces.empty() ? cv::Scalar(150, 150, 150) : faces.front().second.wall_bgr;
+    const Eigen::Vector4f body_rgba(float(wall[2] / 255), float(wall[1] / 255), float(wall[0] / 255), 1);
+    const int body = b_.AddMaterial("building_body", -1, body_rgba);
+    world_.static_geoms.push_back(MakeBox(At(c, z0 + height / 2), At(half, height / 2), body));
+    for (const auto& [side, layout] : faces) {
+      const Vec2 n = normals[side];
+      const Vec2 mid = c + n * std::abs(n.dot(half));
+      const double px_per_m = DetailPxPerM(mid - half.cwiseProduct(n.cwiseAbs().reverse()), mid + half.cwiseProduct(n.cwiseAbs().reverse()),
+                                           kFarFacadePxPerM, std::max(layout.width_m, height));
+      const std::uint64_t seed = SubSeed(building_seed, "facade", static_cast<std::uint64_t>(side));
+      const int skin = AddPicture("facade", Vec2(layout.width_m, height), px_per_m,
+                                  [seed, layout = layout, px_per_m] { return FacadeTexture(seed, layout, px_per_m); });
+      MakeFacade(layout, skin, c, half, n, z0);
+    }
+    // A cornice that breaks the silhouette, and a plant room or stair housing on some roofs.
+    Eigen::Vector4f trim_rgba = body_rgba * static_cast<float>(Uniform(rng, 0.7, 0.9));
+    trim_rgba.w() = 1;
+    const int trim = b_.AddMaterial("building_trim", -1, trim_rgba);
+    world_.static_geoms.push_back(MakeBox(At(c, z0 + height + 0.4), At(half + Vec2::Constant(0.15), 0.4), trim));
+    if (Chance(rng, 0.5)) {
+      const Vec2 size(Uniform(rng, 0.2, 0.45) * half.x(), Uniform(rng, 0.2, 0.45) * half.y());
+      const Vec2 at = c + Vec2(Uniform(rng, -0.4, 0.4) * half.x(), Uniform(rng, -0.4, 0.4) * half.y());
+      const double h = Uniform(rng, 1.5, 3.5);
+      world_.static_geoms.push_back(MakeBox(At(at, z0 + height + 0.8 + h / 2), At(size, h / 2), trim));
+    }
+  }
+
+  // The facade `layout` on the side of the body (centre c, half extents `half`) whose
+  // outward normal is `n`: a thin textured skin on the wall, and the layout's balconies
+  // and awnings as geometry.
+  void MakeFacade(const FacadeLayout& layout, int skin, const Vec2& c, const Vec2& half, const Vec2& n, double z0) {
+    const double w = layout.width_m, h = layout.height_m;
+    const double yaw = YawOf(n);
+    // Seen from the street, the facade's x runs to the viewer's right: n rotated by -90 deg.
+    const Vec2 right = Right(n) * -1.0;
+    const Vec2 wall = c + n * std::abs(n.dot(half));
+    const Vec2 left_edge = wall - right * (w / 2);
+    world_.static_geoms.push_back(MakeBox(At(wall + n * kFacadeSkinM, z0 + h / 2), Vec3(kFacadeSkinM, w / 2, h / 2), skin, yaw));
+    const auto on_facade = [&](double x_m, double out_m) { return left_edge + right * x_m + n * (2 * kFacadeSkinM + out_m); };
+    if (!layout.balconies.empty()) {
+      const cv::Scalar bgr = layout.trim_bgr;
+      const int slab = b_.AddMaterial("balcony", -1, Eigen::Vector4f(float(bgr[2] / 255), float(bgr[1] / 255), float(bgr[0] / 255), 1));
+      for (const FacadeLayout::Opening& b : layout.balconies) {
+        const double depth = 1.0, bw = b.x1_m - b.x0_m, mid = 0.5 * (b.x0_m + b.x1_m);
+        world_.static_geoms.push_back(MakeBox(At(on_facade(mid, depth / 2), z0 + b.z0_m - 0.08), Vec3(depth / 2, bw / 2, 0.08), slab, yaw));
+        world_.static_geoms.push_back(MakeBox(At(on_facade(mid, depth - 0.02), z0 + b.z0_m + 0.5), Vec3(0.02, bw / 2, 0.5), look_.railing, yaw));
+      }
+    }
+    for (const FacadeLayout::Shop& shop : layout.shops) {
+      if (!shop.awning) continue;
+      // A fabric awning under the sign, sloping 15 degrees down toward the street.
+      const cv::Scalar bgr = shop.awning_bgr;
+      const int fabric = b_.AddMaterial("awning", -1, Eigen::Vector4f(float(bgr[2] / 255), float(bgr[1] / 255), float(bgr[0] / 255), 1));
+      const double depth = 1.3, tilt = 15.0 * M_PI / 180;
+      Geom g = MakeBox(At(on_facade(0.5 * (shop.x0_m + shop.x1_m), 0.5 * depth * std::cos(tilt)),
+                          z0 + layout.ground_floor_m - 1.0 - 0.5 * depth * std::sin(tilt)),
+                       Vec3(depth / 2, (shop.x1_m - shop.x0_m) / 2 - 0.2, 0.03), fabric, yaw);
+      g.T_parent_geom.linear() = g.T_parent_geom.linear() * Eigen::AngleAxisd(tilt, Vec3::UnitY()).matrix();
+      world_.static_geoms.push_back(g);
+    }
   }
 
   // Markings, furniture and fixed COCO objects along every street of the inner grid.
@@ -467,14 +605,13 @@ class CityBuilder {
     const double yaw = YawOf(d);
     const double clear = road_ / 2 + 4.0;  // past the crosswalks
     const double len = block_ - 2 * clear;
-    // Centre line: dashes 3 m long every 9 m.
+    // Centre line: dashes 3 m long every 9 m (painted into the street's surface).
     for (double s = clear; s + 3.0 <= block_ - clear + 1e-9; s += 9.0) {
-      world_.static_geoms.push_back(MakeBox(At(pa + d * (s + 1.5), 0.006), Vec3(1.5, 0.075, 0.006), look_.paint, yaw));
+      markings_.push_back({pa + d * (s + 1.5), Vec2(1.5, 0.075), yaw});
     }
     // The parking lanes' lines along both curbs.
     for (double side : {-1.0, 1.0}) {
-      world_.static_geoms.push_back(MakeBox(At(pa + d * (block_ / 2) + r * side * (road_ / 2 - kParkingLaneM), 0.006),
-                                            Vec3(len / 2 + 2.5, 0.06, 0.006), look_.paint, yaw));
+      markings_.push_back({pa + d * (block_ / 2) + r * side * (road_ / 2 - kParkingLaneM), Vec2(len / 2 + 2.5, 0.06), yaw});
     }
     // Sidewalk furniture on both sides: trees, lamps, benches, hydrants, parking slots.
     for (double side : {-1.0, 1.0}) {
@@ -523,13 +660,17 @@ class CityBuilder {
 
   void MakeIntersection(std::mt19937_64& rng, const Node& n) {
     const Vec2 c = NodePos(n);
-    // Crosswalks on all four arms, stripes along the street (texture u across it).
+    // Crosswalks on all four arms: stripes 3 m long along the street, 0.5 m wide, one
+    // every metre across it; a stop line before the crosswalk on the incoming lane.
     for (const Vec2& d : kStreetDirs) {
       const Vec2 p = c + d * (road_ / 2 + 2.0);
-      world_.static_geoms.push_back(MakeBox(At(p, 0.007), Vec3(road_ / 2 - 0.6, 1.5, 0.007), look_.crosswalk, YawOf(Right(d))));
-      // Stop line before the crosswalk on the incoming lane.
-      world_.static_geoms.push_back(MakeBox(At(c + d * (road_ / 2 + 4.0) + Right(-d) * (road_ / 4), 0.007),
-                                            Vec3(0.2, road_ / 4 - 0.3, 0.007), look_.paint, YawOf(d)));
+      const double half_width = road_ / 2 - 0.6;
+      const int stripes = static_cast<int>(std::floor(2 * half_width));
+      for (int k = 0; k < stripes; ++k) {
+        const double across = -half_width + 0.5 + k + 0.5 * (2 * half_width - stripes);
+        markings_.push_back({p + Right(d) * across, Vec2(1.5, 0.25), YawOf(d)});
+      }
+      markings_.push_back({c + d * (road_ / 2 + 4.0) + Right(-d) * (road_ / 4), Vec2(0.2, road_ / 4 - 0.3), YawOf(d)});
     }
     // Near the route: traffic lights at two corners, or a stop sign.
     bool near_route = false;
@@ -564,8 +705,10 @@ class CityBuilder {
     const Vec2 tip = p + toward_road * 1.4;
     world_.static_geoms.push_back(MakeRod(At(p, kCurbHeightM + h - 0.1), At(tip, kCurbHeightM + h + 0.15), 0.05, look_.dark_metal));
     world_.static_geoms.push_back(MakeBox(At(tip, kCurbHeightM + h + 0.05), Vec3(0.35, 0.16, 0.08), look_.metal, YawOf(toward_road)));
-    // A sign board on some poles.
-    world_.static_geoms.push_back(MakeBox(At(p + toward_road * 0.12, kCurbHeightM + 2.6), Vec3(0.02, 0.3, 0.4), look_.plate, YawOf(toward_road)));
+    // A sign board with its own text.
+    const std::uint64_t seed = SubSeed(s_.seed, "street_sign", sign_count_++);
+    const int board = AddPicture("street_sign", Vec2(0.6, 0.8), cv::Size(128, 160), [seed] { return StreetSignTexture(seed); });
+    world_.static_geoms.push_back(MakeBox(At(p + toward_road * 0.12, kCurbHeightM + 2.6), Vec3(0.02, 0.3, 0.4), board, YawOf(toward_road)));
   }
 
   // ---- Fixed COCO objects --------------------------------------------------------------
@@ -616,8 +759,13 @@ class CityBuilder {
         {0.95f, 0.95f, 0.95f, 1}, {0.08f, 0.08f, 0.09f, 1}, {0.6f, 0.62f, 0.65f, 1}, {0.7f, 0.08f, 0.07f, 1},
         {0.1f, 0.2f, 0.55f, 1},   {0.35f, 0.36f, 0.38f, 1}, {0.1f, 0.3f, 0.15f, 1},  {0.95f, 0.75f, 0.1f, 1},
         {0.5f, 0.25f, 0.1f, 1},   {0.3f, 0.5f, 0.7f, 1}};
-    const Eigen::Vector4f colour = kPalette[UniformInt(rng, 0, 9)];
+    // Its own shade of a common colour, and plates with its own registration.
+    const std::uint64_t vehicle_seed = SubSeed(s_.seed, "vehicle", vehicle_count_++);
+    std::mt19937_64 own(vehicle_seed);
+    Eigen::Vector4f colour = kPalette[UniformInt(rng, 0, 9)];
+    colour.head<3>() = (colour.head<3>() * static_cast<float>(Uniform(own, 0.85, 1.1))).cwiseMin(1.f);
     const int paint = b_.AddMaterial(kind + "_paint", look_.car_paint_texture, colour, 0.5f, 0.5f);
+    const int plate = AddPicture("plate", Vec2(0.52, 0.13), cv::Size(256, 64), [vehicle_seed] { return NumberPlateTexture(vehicle_seed); });
     Part part{"body", {}};
     auto& g = part.geoms;
     auto wheels = [&](double L, double W, double r) {
@@ -634,8 +782,8 @@ class CityBuilder {
         g.push_back(MakeBox(Vec3(L / 2, y * (W / 2 - 0.22), z), Vec3(0.02, 0.16, 0.06), look_.headlight));
         g.push_back(MakeBox(Vec3(-L / 2, y * (W / 2 - 0.2), z), Vec3(0.02, 0.14, 0.07), look_.taillight));
       }
-      g.push_back(MakeBox(Vec3(L / 2 + 0.01, 0, z - 0.2), Vec3(0.01, 0.26, 0.065), look_.plate));
-      g.push_back(MakeBox(Vec3(-L / 2 - 0.01, 0, z - 0.1), Vec3(0.01, 0.26, 0.065), look_.plate));
+      g.push_back(MakeBox(Vec3(L / 2 + 0.01, 0, z - 0.2), Vec3(0.01, 0.26, 0.065), plate));
+      g.push_back(MakeBox(Vec3(-L / 2 - 0.01, 0, z - 0.1), Vec3(0.01, 0.26, 0.065), plate));
     };
     if (kind == "truck") {
       const double L = Uniform(rng, 6.0, 7.0), W = 2.3;
@@ -643,7 +791,9 @@ class CityBuilder {
       g.push_back(MakeBox(Vec3(L / 2 - 0.35, 0, 1.85), Vec3(0.36, W / 2 - 0.08, 0.4), look_.glass));  // windscreen
       const int cargo = b_.AddMaterial("truck_cargo", look_.car_paint_texture, Eigen::Vector4f(0.92f, 0.92f, 0.9f, 1));
       g.push_back(MakeBox(Vec3(-0.95, 0, 1.9), Vec3(L / 2 - 0.95, W / 2, 1.35), cargo));          // box
-      g.push_back(MakeBox(Vec3(-0.95, W / 2 + 0.005, 2.0), Vec3(1.6, 0.005, 0.6), look_.plate));  // logo
+      const std::uint64_t logo_seed = SubSeed(vehicle_seed, "logo");
+      const int logo = AddPicture("truck_logo", Vec2(3.2, 1.2), cv::Size(320, 120), [logo_seed] { return CompanyLogoTexture(logo_seed); });
+      g.push_back(MakeBox(Vec3(-0.95, W / 2 + 0.005, 2.0), Vec3(1.6, 0.005, 0.6), logo));
       g.push_back(MakeBox(Vec3(0, 0, 0.55), Vec3(L / 2, W / 2 - 0.1, 0.12), look_.dark_metal));   // chassis
       wheels(L, W, 0.45);
       lights_and_plates(L, W, 0.75);
@@ -1664,7 +1814,10 @@ class CityBuilder {
   World world_;
   WorldBuilder b_;
   CityLook look_;
-  std::vector<int> facade_textures_, shop_textures_;
+  PicturePages pictures_;               // every surface's own picture, packed at the end
+  std::vector<RoadMarking> markings_;         // painted into the streets' surfaces
+  std::uint64_t building_count_ = 0, sign_count_ = 0, vehicle_count_ = 0;
+
   double block_, road_, walk_, lane_;
   std::vector<Node> nodes_;
   std::vector<int> dirs_;

@@ -13,19 +13,12 @@ namespace segslam::scenes {
 
 enum class FacadeStyle { kBrick, kConcrete, kGlass, kPlaster };
 
-// City. Sizes in pixels are noted; the builders choose the tile size in metres.
-cv::Mat FacadeTexture(std::uint64_t seed, FacadeStyle style, int floors, int bays);  // 1024 x 768
-cv::Mat ShopfrontTexture(std::uint64_t seed);   // 1024 x 320, ground floor with shop signs
-cv::Mat AsphaltTexture(std::uint64_t seed);     // 512 x 512
-cv::Mat SidewalkTexture(std::uint64_t seed);    // 512 x 512, 6 x 6 pavers
-cv::Mat ConcreteTexture(std::uint64_t seed);    // 256 x 256
-cv::Mat CrosswalkTexture(std::uint64_t seed);   // 256 x 256, one stripe per tile (u)
-cv::Mat PaintTexture(std::uint64_t seed);       // 128 x 128, worn white road paint
+// City (the pictures of single places, facades and streets, are in city_textures.h).
+// Sizes in pixels are noted; the builders choose the tile size in metres.
 cv::Mat BarkTexture(std::uint64_t seed);        // 256 x 256
 cv::Mat FoliageTexture(std::uint64_t seed);     // 512 x 512
 cv::Mat CarPaintTexture(std::uint64_t seed);    // 256 x 256, near white: tinted by rgba
 cv::Mat CarGlassTexture(std::uint64_t seed);    // 256 x 256
-cv::Mat PlateTexture(std::uint64_t seed);       // 256 x 64
 cv::Mat MetalTexture(std::uint64_t seed);       // 128 x 128
 cv::Mat StopSignTexture(std::uint64_t seed);    // 256 x 256
 cv::Mat TrafficLightTexture(std::uint64_t seed);  // 128 x 256, three lamps
@@ -33,6 +26,8 @@ cv::Mat ClothTexture(std::uint64_t seed, int pattern);  // 256 x 256; pattern 0.
 cv::Mat SkinTexture(std::uint64_t seed);        // 64 x 64
 
 // Office.
+// A facade of `floors` by `bays` windows, 1024 x 768: the view out of an office window.
+cv::Mat FacadeTexture(std::uint64_t seed, FacadeStyle style, int floors, int bays);
 cv::Mat WallTexture(std::uint64_t seed);        // 512 x 512, painted plaster
 cv::Mat PosterTexture(std::uint64_t seed);      // 384 x 512 (portrait)
 cv::Mat WhiteboardTexture(std::uint64_t seed);  // 1024 x 512

@@ -40,6 +40,12 @@ struct Texture {
 struct Material {
   std::string name;
   int texture = -1;                        // index into World::textures, -1 = untextured
+  // Textured boxes: where the texture starts on every face, in copies of the texture
+  // ((0, 0) = its top-left corner), and the metres one copy covers there (zero: the
+  // texture's own tile_size_m). A texture that packs many pictures (one per facade,
+  // street, plate) gives each picture's material the window of its own picture.
+  Eigen::Vector2d texture_origin = Eigen::Vector2d::Zero();
+  Eigen::Vector2d texture_tile_m = Eigen::Vector2d::Zero();
   Eigen::Vector4f rgba{1.f, 1.f, 1.f, 1.f};  // multiplies the texture colour
   float specular = 0.1f;                   // MuJoCo's material specular, [0, 1]
   float shininess = 0.2f;                  // MuJoCo's material shininess, [0, 1]

@@ -43,11 +43,11 @@ const char* ShapeName(scenes::Shape shape) {
   return "box";
 }
 
-// A box as 6 faces x 4 vertices with texture coordinates in texture copies:
-// vertical faces: u to the right seen from outside, v down (image up = +z);
-// horizontal faces: u along +x, v along -y.
+// A box as 6 faces x 4 vertices with texture coordinates in texture copies, from
+// `offset` at each face's top-left corner: vertical faces: u to the right seen from
+// outside, v down (image up = +z); horizontal faces: u along +x, v along -y.
 std::string BoxMeshAsset(const std::string& name, const Eigen::Vector3d& h,
-                         const Eigen::Vector2d& tile) {
+                         const Eigen::Vector2d& tile, const Eigen::Vector2d& offset) {
   struct Face {
     Eigen::Vector3d normal, right, down;  // unit axes in the geom frame
   };
@@ -72,8 +72,8 @@ std::string BoxMeshAsset(const std::string& name, const Eigen::Vector3d& h,
       const Eigen::Vector3d p = centre + f.right * (c.x() * hr) + f.down * (c.y() * hd);
       vertex << Vec3(p) << "  ";
       // Distance from the face's top-left corner along right and down, in copies.
-      const double u = (c.x() + 1) * hr / tile.x();
-      const double v = (c.y() + 1) * hd / tile.y();
+      const double u = offset.x() + (c.x() + 1) * hr / tile.x();
+      const double v = offset.y() + (c.y() + 1) * hd / tile.y();
       texcoord << Num(u) << " " << Num(v) << "  ";
     }
     // right x down = -normal, so (tl, tr, br) is clockwise seen from outside; emit
@@ -85,6 +85,11 @@ std::string BoxMeshAsset(const std::string& name, const Eigen::Vector3d& h,
   return fmt::format("    <mesh name=\"{}\" vertex=\"{}\" face=\"{}\" texcoord=\"{}\"/>\n", name,
                      vertex.str(), face.str(), texcoord.str());
 }
+
+// MuJoCo 2.2.2's mjrContext keeps the names of 100 textures (its arrays are sized 100,
+// although mjMAXTEXTURE says 1000); the 101st and later overwrite the display lists'
+// bases, and no texture is drawn any more.
+constexpr size_t kMaxTextures = 100;
 
 void CheckWorld(const scenes::World& world) {
   const scenes::CameraSpec& c = world.camera;
@@ -106,6 +111,11 @@ void CheckWorld(const scenes::World& world) {
       throw Error(fmt::format("world '{}': material {} has texture index {} out of range",
                               world.name, i, t));
     }
+  }
+  if (world.textures.size() > kMaxTextures) {
+    throw Error(fmt::format("world '{}': {} textures, more than MuJoCo's renderer holds ({}); "
+                            "pack pictures into fewer textures",
+                            world.name, world.textures.size(), kMaxTextures));
   }
   for (size_t i = 0; i < world.textures.size(); ++i) {
     const scenes::Texture& t = world.textures[i];
@@ -191,7 +201,8 @@ class AssetSection {
     const std::string pose = PoseAttributes(g.T_parent_geom);
     if (textured && g.shape == scenes::Shape::kBox) {
       const std::string mesh = fmt::format("box{}", id);
-      xml_ << BoxMeshAsset(mesh, g.size, world_.textures[mat.texture].tile_size_m);
+      const Eigen::Vector2d tile = mat.texture_tile_m.x() > 0 ? mat.texture_tile_m : world_.textures[mat.texture].tile_size_m;
+      xml_ << BoxMeshAsset(mesh, g.size, tile, mat.texture_origin);
       return fmt::format("{}<geom type=\"mesh\" mesh=\"{}\" material=\"mat{}\" {}/>\n", indent,
                          mesh, g.material, pose);
     }
