@@ -2,6 +2,7 @@
 // (render + noise + PNG encoding + writing) and of rendering alone, per GL back-end.
 // `segslam bench slam SEQUENCE`: per-frame tracking time of the SLAM core, split by
 // stage, and the local bundle adjustment time per keyframe.
+// `segslam bench aliasing DATASET`: bench_aliasing_command.cpp.
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/tum_dataset.h"
@@ -213,7 +214,7 @@ int RunBenchSlam(const BenchSlamArgs& args) {
 }  // namespace
 
 void AddBenchCommand(CLI::App& app, std::function<int()>* action) {
-  CLI::App* bench = app.add_subcommand("bench", "Measure speed");
+  CLI::App* bench = app.add_subcommand("bench", "Measure speed, and how alike distant places look");
   bench->require_subcommand(1);
   auto args = std::make_shared<BenchRenderArgs>();
   CLI::App* render = bench->add_subcommand(
@@ -255,6 +256,8 @@ void AddBenchCommand(CLI::App& app, std::function<int()>* action) {
   slam->add_option("--refiner", slam_args->refiner_options,
                    "Override a refinement option of the mutual loop, NAME=VALUE (repeatable; see seg/refiner.h)");
   slam->callback([slam_args, action] { *action = [slam_args] { return RunBenchSlam(*slam_args); }; });
+
+  AddBenchAliasingCommand(*bench, action);
 }
 
 }  // namespace segslam::harness

@@ -10,6 +10,8 @@ namespace segslam::harness {
 
 void AddGenerateCommand(CLI::App& app, std::function<int()>* action);
 void AddBenchCommand(CLI::App& app, std::function<int()>* action);
+// `bench aliasing`, added under the `bench` subcommand by AddBenchCommand.
+void AddBenchAliasingCommand(CLI::App& bench, std::function<int()>* action);
 void AddPreviewCommand(CLI::App& app, std::function<int()>* action);
 void AddSegEvalCommand(CLI::App& app, std::function<int()>* action);
 void AddEvalTrajCommand(CLI::App& app, std::function<int()>* action);

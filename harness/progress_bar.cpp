@@ -8,8 +8,11 @@
 
 namespace segslam::harness {
 
-ProgressBar::ProgressBar(std::string label)
-    : label_(std::move(label)), interactive_(::isatty(STDERR_FILENO) != 0) {}
+ProgressBar::ProgressBar(std::string label, std::string unit)
+    : label_(std::move(label)),
+      unit_(std::move(unit)),
+      rate_unit_(unit_ == "frames" ? "fps" : unit_ + "/s"),
+      interactive_(::isatty(STDERR_FILENO) != 0) {}
 
 void ProgressBar::Update(int done, int total, double rate_per_s, const std::string& detail) {
   const double fraction = total > 0 ? std::clamp(static_cast<double>(done) / total, 0.0, 1.0) : 1.0;
@@ -17,9 +20,9 @@ void ProgressBar::Update(int done, int total, double rate_per_s, const std::stri
   if (interactive_) {
     constexpr int kWidth = 30;
     const int filled = static_cast<int>(fraction * kWidth);
-    std::fprintf(stderr, "\r%s [%s%s] %d/%d frames %s %.1f fps, %.0f s left   ", label_.c_str(),
+    std::fprintf(stderr, "\r%s [%s%s] %d/%d %s %s %.1f %s, %.0f s left   ", label_.c_str(),
                  std::string(filled, '#').c_str(), std::string(kWidth - filled, '.').c_str(), done,
-                 total, detail.c_str(), rate_per_s, eta_s);
+                 total, unit_.c_str(), detail.c_str(), rate_per_s, rate_unit_.c_str(), eta_s);
     std::fflush(stderr);
     line_open_ = true;
     return;
@@ -27,8 +30,9 @@ void ProgressBar::Update(int done, int total, double rate_per_s, const std::stri
   const int decile = static_cast<int>(fraction * 10);
   if (decile != last_logged_decile_) {
     last_logged_decile_ = decile;
-    std::fprintf(stderr, "%s %3.0f%% %d/%d frames %s %.1f fps, %.0f s left\n", label_.c_str(),
-                 100 * fraction, done, total, detail.c_str(), rate_per_s, eta_s);
+    std::fprintf(stderr, "%s %3.0f%% %d/%d %s %s %.1f %s, %.0f s left\n", label_.c_str(),
+                 100 * fraction, done, total, unit_.c_str(), detail.c_str(), rate_per_s, rate_unit_.c_str(),
+                 eta_s);
   }
 }
 

@@ -8,14 +8,17 @@ namespace segslam::harness {
 
 class ProgressBar {
  public:
-  explicit ProgressBar(std::string label);
-  // `done` of `total` items, at `rate_per_s`; `unit` names the items ("frames").
+  // `unit` names the items counted ("frames": the rate reads "fps"; else "<unit>/s").
+  explicit ProgressBar(std::string label, std::string unit = "frames");
+  // `done` of `total` items, at `rate_per_s`; `detail` follows the count.
   void Update(int done, int total, double rate_per_s, const std::string& detail = "");
   // Ends the line (on a terminal) so later output starts on a new line.
   void Finish();
 
  private:
   std::string label_;
+  std::string unit_;
+  std::string rate_unit_;
   bool interactive_;
   int last_logged_decile_ = -1;
   bool line_open_ = false;

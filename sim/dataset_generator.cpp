@@ -264,12 +264,19 @@ class DatasetGeneration {
     for (scenes::Pass pass : scenes::kBothPasses) GeneratePass(pass);
     if (staging_) {
       WriteFileAtomically(staging_->path() / "scenario.yaml", scenario_.text);
-      WriteManifest(staging_->path(), {{"scenario", scenario_.name},
-                                       {"seed", scenario_.seed},
-                                       {"kind", world_.kind},
-                                       {"generator", "segslam generate"},
-                                       {"movers_left_out", world_.movers_left_out},
-                                       {"red_lights_left_out", world_.red_lights_left_out}});
+      nlohmann::json extra = {{"scenario", scenario_.name},
+                              {"seed", scenario_.seed},
+                              {"kind", world_.kind},
+                              {"generator", "segslam generate"},
+                              {"movers_left_out", world_.movers_left_out},
+                              {"red_lights_left_out", world_.red_lights_left_out}};
+      if (options_.staged_extra) {
+        const nlohmann::json added = options_.staged_extra(staging_->path());
+        if (!added.is_object()) throw Error("generate: staged_extra must return a JSON object");
+        for (const auto& [key, value] : added.items()) extra[key] = value;
+        if (options_.cancel && options_.cancel->load()) throw Error("generate: cancelled");
+      }
+      WriteManifest(staging_->path(), extra);
       if (options_.keep_complete_dataset && fs::exists(target_ / "manifest.json")) {
         summary_.kept_existing = true;  // the staging folder goes with staging_
       } else {

@@ -15,6 +15,8 @@
 #include "sim/gl_context.h"
 #include "sim/world_renderer.h"
 
+#include <nlohmann/json.hpp>
+
 #include <atomic>
 #include <filesystem>
 #include <functional>
@@ -35,6 +37,13 @@ struct GenerateOptions {
   bool write_files = true;                 // false: render + noise + encode, write nothing
                                            // (benchmarks of the pipeline without disk)
   const std::atomic<bool>* cancel = nullptr;  // set to true to stop (Ctrl-C); checked per frame
+  // Called once both passes are written, with the staging folder, before the top
+  // manifest.json is written and the folder renamed into place; the keys of the object it
+  // returns are added to the manifest's "extra". For figures measured on the finished
+  // passes by code sim/ may not use (the harness's aliasing measure needs slam/). It
+  // sees the folder as it will be, so no file is changed after its checksum is taken.
+  // Not called without write_files. What it throws ends the generation as any error does.
+  std::function<nlohmann::json(const std::filesystem::path& staged_dir)> staged_extra;
 
   bool IsValid(std::string* error) const;
 };
