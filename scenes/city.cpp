@@ -43,6 +43,7 @@ constexpr double kNearPxPerM = 32.0, kFarGroundPxPerM = 8.0, kFarFacadePxPerM = 
 constexpr int kMaxTexturePx = 2040;    // longest side of one surface's picture (a page, less gutters)
 constexpr double kRoadTopM = 0.004;    // street surfaces lie on the ground plane
 constexpr double kFacadeSkinM = 0.03;  // half thickness of a facade's textured skin
+constexpr double kVehiclePxPerM = 40.0;  // a vehicle's paint and glass
 constexpr double kStopLineM = 4.0;          // stop line, before the edge of the crossing road
 constexpr double kQueueGapM = 2.0;          // bumper to bumper, standing in a queue
 constexpr double kCarAccelMps2 = 2.0;       // braking and pulling away at a red light
@@ -69,8 +70,8 @@ struct Edge {
 
 // Materials and textures the city uses, by role.
 struct CityLook {
-  int ground, bark, metal, dark_metal, glass, railing;
-  int car_paint_texture, clothes_textures[6], skin_texture;
+  int ground, bark, metal, dark_metal, railing;
+  int clothes_textures[6], skin_texture;
   int rubber, chrome, headlight, taillight, stop_sign, traffic_lamps, wood, red_paint;
   std::vector<int> foliage;
 };
@@ -169,8 +170,6 @@ class CityBuilder {
     const int metal_t = tex("metal", MetalTexture(SubSeed(seed, "metal")), 0.5, 0.5);
     look_.metal = mat("metal", metal_t, Eigen::Vector4f(0.75f, 0.78f, 0.78f, 1), 0.4f);
     look_.dark_metal = mat("dark_metal", metal_t, Eigen::Vector4f(0.3f, 0.32f, 0.3f, 1), 0.4f);
-    look_.glass = mat("car_glass", tex("car_glass", CarGlassTexture(SubSeed(seed, "glass")), 1.2, 0.5), white, 0.6f);
-    look_.car_paint_texture = tex("car_paint", CarPaintTexture(SubSeed(seed, "carpaint")), 2.0, 2.0);
     for (int i = 0; i < 6; ++i) {
       look_.clothes_textures[i] = tex("cloth_" + std::to_string(i), ClothTexture(SubSeed(seed, "cloth", i), i), 0.5, 0.5);
     }
@@ -764,7 +763,21 @@ class CityBuilder {
     std::mt19937_64 own(vehicle_seed);
     Eigen::Vector4f colour = kPalette[UniformInt(rng, 0, 9)];
     colour.head<3>() = (colour.head<3>() * static_cast<float>(Uniform(own, 0.85, 1.1))).cwiseMin(1.f);
-    const int paint = b_.AddMaterial(kind + "_paint", look_.car_paint_texture, colour, 0.5f, 0.5f);
+    // Paint and glass of its own (panel gaps, scratches, dirt; what shows through the
+    // windows), each picture as large as the largest face it covers.
+    const auto paint_of = [&](const std::string& name, const Vec2& size_m, const Eigen::Vector4f& rgba, std::uint64_t index) {
+      const std::uint64_t seed = SubSeed(vehicle_seed, name, index);
+      const cv::Size px(std::max(2, static_cast<int>(std::lround(size_m.x() * kVehiclePxPerM))),
+                        std::max(2, static_cast<int>(std::lround(size_m.y() * kVehiclePxPerM))));
+      return pictures_.Add(b_, name, px, size_m, [seed, px] { return VehiclePaintTexture(seed, px); }, rgba, 0.5f, 0.5f);
+    };
+    const auto glass_of = [&](const Vec2& size_m) {
+      const std::uint64_t seed = SubSeed(vehicle_seed, "glass");
+      const cv::Size px(std::max(2, static_cast<int>(std::lround(size_m.x() * kVehiclePxPerM))),
+                        std::max(2, static_cast<int>(std::lround(size_m.y() * kVehiclePxPerM))));
+      return pictures_.Add(b_, "car_glass", px, size_m, [seed, px] { return VehicleGlassTexture(seed, px); },
+                           Eigen::Vector4f::Ones(), 0.6f);
+    };
     const int plate = AddPicture("plate", Vec2(0.52, 0.13), cv::Size(256, 64), [vehicle_seed] { return NumberPlateTexture(vehicle_seed); });
     Part part{"body", {}};
     auto& g = part.geoms;
@@ -787,9 +800,10 @@ class CityBuilder {
     };
     if (kind == "truck") {
       const double L = Uniform(rng, 6.0, 7.0), W = 2.3;
+      const int paint = paint_of(kind + "_paint", Vec2(W, 1.9), colour, 0);
       g.push_back(MakeBox(Vec3(L / 2 - 0.9, 0, 1.45), Vec3(0.9, W / 2, 0.95), paint));           // cab
-      g.push_back(MakeBox(Vec3(L / 2 - 0.35, 0, 1.85), Vec3(0.36, W / 2 - 0.08, 0.4), look_.glass));  // windscreen
-      const int cargo = b_.AddMaterial("truck_cargo", look_.car_paint_texture, Eigen::Vector4f(0.92f, 0.92f, 0.9f, 1));
+      g.push_back(MakeBox(Vec3(L / 2 - 0.35, 0, 1.85), Vec3(0.36, W / 2 - 0.08, 0.4), glass_of(Vec2(W, 0.8))));  // windscreen
+      const int cargo = paint_of("truck_cargo", Vec2(L - 1.9, 2.7), Eigen::Vector4f(0.92f, 0.92f, 0.9f, 1), 1);
       g.push_back(MakeBox(Vec3(-0.95, 0, 1.9), Vec3(L / 2 - 0.95, W / 2, 1.35), cargo));          // box
       const std::uint64_t logo_seed = SubSeed(vehicle_seed, "logo");
       const int logo = AddPicture("truck_logo", Vec2(3.2, 1.2), cv::Size(320, 120), [logo_seed] { return CompanyLogoTexture(logo_seed); });
@@ -799,16 +813,18 @@ class CityBuilder {
       lights_and_plates(L, W, 0.75);
     } else if (kind == "bus") {
       const double L = 11.0, W = 2.5;
-      g.push_back(MakeBox(Vec3(0, 0, 1.75), Vec3(L / 2, W / 2, 1.3), paint));
-      g.push_back(MakeBox(Vec3(0, 0, 2.15), Vec3(L / 2 - 0.4, W / 2 + 0.01, 0.5), look_.glass));
-      g.push_back(MakeBox(Vec3(L / 2 + 0.01, 0, 2.0), Vec3(0.01, W / 2 - 0.1, 0.8), look_.glass));
+      g.push_back(MakeBox(Vec3(0, 0, 1.75), Vec3(L / 2, W / 2, 1.3), paint_of(kind + "_paint", Vec2(L, 2.6), colour, 0)));
+      const int glass = glass_of(Vec2(L, 1.6));
+      g.push_back(MakeBox(Vec3(0, 0, 2.15), Vec3(L / 2 - 0.4, W / 2 + 0.01, 0.5), glass));
+      g.push_back(MakeBox(Vec3(L / 2 + 0.01, 0, 2.0), Vec3(0.01, W / 2 - 0.1, 0.8), glass));
       wheels(L * 0.85, W, 0.5);
       lights_and_plates(L, W, 0.8);
     } else {
       const double L = Uniform(rng, 4.1, 4.8), W = Uniform(rng, 1.75, 1.9), hb = Uniform(rng, 0.32, 0.4);
       const double cabin_l = L * Uniform(rng, 0.45, 0.6);
+      const int paint = paint_of(kind + "_paint", Vec2(L, W), colour, 0);
       g.push_back(MakeBox(Vec3(0, 0, 0.28 + hb), Vec3(L / 2, W / 2, hb), paint));  // lower body
-      g.push_back(MakeBox(Vec3(-0.08 * L, 0, 0.28 + 2 * hb + 0.24), Vec3(cabin_l / 2, W / 2 - 0.1, 0.24), look_.glass));
+      g.push_back(MakeBox(Vec3(-0.08 * L, 0, 0.28 + 2 * hb + 0.24), Vec3(cabin_l / 2, W / 2 - 0.1, 0.24), glass_of(Vec2(cabin_l, W))));
       g.push_back(MakeBox(Vec3(-0.08 * L, 0, 0.28 + 2 * hb + 0.5), Vec3(cabin_l / 2 - 0.1, W / 2 - 0.12, 0.025), paint));  // roof
       g.push_back(MakeBox(Vec3(L / 2 - 0.05, 0, 0.4), Vec3(0.08, W / 2, 0.1), look_.rubber));    // bumpers
       g.push_back(MakeBox(Vec3(-L / 2 + 0.05, 0, 0.4), Vec3(0.08, W / 2, 0.1), look_.rubber));

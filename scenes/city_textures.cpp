@@ -209,8 +209,9 @@ cv::Mat PavedStripTexture(std::uint64_t seed, const GroundPatch& patch, double p
   const cv::Size size = patch.SizePx();
   const double ppm = patch.px_per_m;
   const double area_m2 = (patch.hi_m - patch.lo_m).prod();
-  const Scalar joint = Jitter(rng, Scalar(95, 100, 105), 12);
-  const Scalar base = Jitter(rng, Scalar(160, 166, 172), 25);
+  // Concrete greys, a little warm or cool from one block to the next.
+  const Scalar joint = Scalar(95, 100, 105) + Scalar::all(rng.uniform(-12, 12));
+  const Scalar base = Jitter(rng, Scalar(160, 166, 172) + Scalar::all(rng.uniform(-25, 25)), 6);
   cv::Mat img(size, CV_8UC3, joint);
   // Pavers in a running bond along x, aligned with the world grid so neighbouring strips
   // meet; each with its own shade, some cracked, a few replaced by another stone.
@@ -468,6 +469,60 @@ cv::Mat FacadeTexture(std::uint64_t seed, const FacadeLayout& f, double ppm) {
     cv::line(img, Point(x, 0), Point(x, H), Scalar(70, 75, 78), std::max(1, Px(0.1, ppm)));
   }
   AddGrain(img, rng, 5.0);
+  return img;
+}
+
+// ---- Vehicles ---------------------------------------------------------------------------
+
+cv::Mat VehiclePaintTexture(std::uint64_t seed, cv::Size size) {
+  cv::RNG rng = MakeRng(seed);
+  cv::Mat img(size, CV_8UC3, Scalar::all(235));
+  AddSmoothNoise(img, rng, std::max(4, size.width / 8), 9);
+  const int seam = std::max(1, size.width / 150);
+  // Door seams across the side, a handle behind each.
+  for (int k = rng.uniform(1, 4); k > 0; --k) {
+    const int x = rng.uniform(size.width / 5, std::max(size.width / 5 + 1, size.width * 4 / 5));
+    cv::line(img, Point(x, 0), Point(x + rng.uniform(-3, 4), size.height), Scalar::all(95), seam, cv::LINE_AA);
+    const Rect handle(x + size.width / 30, size.height / 4, std::max(2, size.width / 18), std::max(1, size.height / 20));
+    cv::rectangle(img, handle & Rect(0, 0, size.width, size.height), Scalar::all(rng.uniform(120, 170)), cv::FILLED);
+  }
+  for (int k = rng.uniform(2, 12); k > 0; --k) {  // scratches
+    const Point p(rng.uniform(0, size.width), rng.uniform(0, size.height));
+    cv::line(img, p, p + Point(rng.uniform(-size.width / 8, size.width / 8 + 1), rng.uniform(-4, 5)),
+             Scalar::all(rng.uniform(150, 255)), 1, cv::LINE_AA);
+  }
+  if (rng.uniform(0, 3) == 0) {  // a sticker or a dent's shadow
+    const Point p(rng.uniform(0, size.width), rng.uniform(0, size.height));
+    cv::ellipse(img, p, cv::Size(rng.uniform(3, 12), rng.uniform(3, 9)), rng.uniform(0, 180), 0, 360,
+                rng.uniform(0, 2) ? RandomColor(rng, 40, 250) : Scalar::all(150), cv::FILLED, cv::LINE_AA);
+  }
+  cv::Mat dirt = img(Rect(0, size.height * 3 / 4, size.width, size.height - size.height * 3 / 4));
+  AddSmoothNoise(dirt, rng, 4, rng.uniform(10, 30));
+  AddGrain(img, rng, 3.0);
+  return img;
+}
+
+cv::Mat VehicleGlassTexture(std::uint64_t seed, cv::Size size) {
+  cv::RNG rng = MakeRng(seed);
+  cv::Mat img(size, CV_8UC3, Jitter(rng, Scalar(40, 35, 30), 8));
+  const int sky = size.height * rng.uniform(30, 50) / 100;
+  for (int y = 0; y < sky; ++y) {
+    const double f = 1.0 - double(y) / std::max(1, sky);
+    cv::line(img, Point(0, y), Point(size.width, y), Scalar(40 + 100 * f, 35 + 85 * f, 30 + 70 * f));
+  }
+  for (int k = rng.uniform(0, 4); k > 0; --k) {  // headrests and passengers
+    const Point c(rng.uniform(0, size.width), size.height * rng.uniform(55, 80) / 100);
+    cv::ellipse(img, c, cv::Size(std::max(2, size.height / 6), std::max(2, size.height / 4)), 0, 0, 360,
+                Jitter(rng, Scalar(22, 22, 24), 10), cv::FILLED, cv::LINE_AA);
+  }
+  if (rng.uniform(0, 5) == 0) {  // a parking ticket or a sun shade
+    cv::rectangle(img, Rect(rng.uniform(0, size.width), size.height * 2 / 3, size.width / 12 + 2, size.height / 6 + 2),
+                  RandomColor(rng, 150, 250), cv::FILLED);
+  }
+  const int a = rng.uniform(0, size.height), b = rng.uniform(0, size.height);
+  cv::line(img, Point(0, a), Point(size.width, b), Scalar(170, 165, 160), std::max(1, size.height / 30), cv::LINE_AA);
+  AddSmoothNoise(img, rng, std::max(4, size.width / 10), 8);
+  AddGrain(img, rng, 3.0);
   return img;
 }
 

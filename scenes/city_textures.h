@@ -82,6 +82,13 @@ FacadeLayout PlanFacade(std::uint64_t building_seed, int face, double width_m, d
 // as a whole: grime near the ground, rain streaks under sills, posters, tags.
 cv::Mat FacadeTexture(std::uint64_t seed, const FacadeLayout& layout, double px_per_m);
 
+// A vehicle's paint, near white (its material's colour tints it): panel seams, handles,
+// scratches, a dent or sticker, dirt toward the sills; `size_px` covers its largest face.
+cv::Mat VehiclePaintTexture(std::uint64_t seed, cv::Size size_px);
+// A vehicle's windows: sky reflected at the top, what shows through below (headrests,
+// a passenger, a parking ticket), a glare streak.
+cv::Mat VehicleGlassTexture(std::uint64_t seed, cv::Size size_px);
+
 // A number plate with its own registration (letters and digits), 256 x 64.
 cv::Mat NumberPlateTexture(std::uint64_t seed);
 

@@ -9,13 +9,13 @@
 namespace segslam::scenes {
 
 int PicturePages::Add(WorldBuilder& builder, const std::string& name, cv::Size size_px, const Eigen::Vector2d& size_m,
-                      std::function<cv::Mat()> draw, const Eigen::Vector4f& rgba, float specular) {
+                      std::function<cv::Mat()> draw, const Eigen::Vector4f& rgba, float specular, float shininess) {
   if (size_px.width <= 0 || size_px.height <= 0 || size_px.width + 2 * gutter_px_ > page_px_ ||
       size_px.height + 2 * gutter_px_ > page_px_) {
     throw std::invalid_argument("picture '" + name + "' of " + std::to_string(size_px.width) + "x" +
                                 std::to_string(size_px.height) + " px does not fit a page of " + std::to_string(page_px_) + " px");
   }
-  const int material = builder.AddMaterial(name, -1, rgba, specular);
+  const int material = builder.AddMaterial(name, -1, rgba, specular, shininess);
   pictures_.push_back({material, size_px, size_m, std::move(draw)});
   return material;
 }

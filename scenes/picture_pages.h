@@ -29,7 +29,8 @@ class PicturePages {
   // material's texture is set by Pack(). Throws std::invalid_argument for a picture larger
   // than a page.
   int Add(WorldBuilder& builder, const std::string& name, cv::Size size_px, const Eigen::Vector2d& size_m,
-          std::function<cv::Mat()> draw, const Eigen::Vector4f& rgba = Eigen::Vector4f::Ones(), float specular = 0.1f);
+          std::function<cv::Mat()> draw, const Eigen::Vector4f& rgba = Eigen::Vector4f::Ones(), float specular = 0.1f,
+          float shininess = 0.2f);
 
   // Places every picture added on pages (new textures of `world`, tallest pictures
   // first, in rows), gives each material its window, and draws the pictures in

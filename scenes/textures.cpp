@@ -119,37 +119,6 @@ cv::Mat FoliageTexture(std::uint64_t seed) {
   return img;
 }
 
-cv::Mat CarPaintTexture(std::uint64_t seed) {
-  cv::RNG rng = MakeRng(seed);
-  cv::Mat img(256, 256, CV_8UC3, Scalar(235, 235, 235));
-  AddSmoothNoise(img, rng, 32, 10);
-  // Panel gaps, a door handle and a few scratches and dirt at the bottom.
-  cv::line(img, Point(128 + rng.uniform(-10, 10), 0), Point(128, 256), Scalar(90, 90, 90), 2, cv::LINE_AA);
-  cv::rectangle(img, Rect(150, 70, 30, 8), Scalar(150, 150, 150), cv::FILLED);
-  for (int k = 0; k < 8; ++k) {
-    const Point p(rng.uniform(0, 256), rng.uniform(0, 256));
-    cv::line(img, p, p + Point(rng.uniform(-15, 16), rng.uniform(-5, 6)), Scalar::all(rng.uniform(150, 255)), 1, cv::LINE_AA);
-  }
-  cv::Mat dirt = img(Rect(0, 200, 256, 56));
-  AddSmoothNoise(dirt, rng, 6, 25);
-  AddGrain(img, rng, 3.0);
-  return img;
-}
-
-cv::Mat CarGlassTexture(std::uint64_t seed) {
-  cv::RNG rng = MakeRng(seed);
-  cv::Mat img(256, 256, CV_8UC3, Scalar(40, 35, 30));
-  // Sky reflection at the top, headrests and a passenger silhouette inside.
-  for (int y = 0; y < 110; ++y) cv::line(img, Point(0, y), Point(255, y), Scalar(140 - y, 120 - y * 0.8, 100 - y * 0.7));
-  for (int k = 0; k < 2; ++k) {
-    cv::ellipse(img, Point(60 + 130 * k + rng.uniform(-10, 10), 170), cv::Size(26, 34), 0, 0, 360, Scalar(20, 20, 22), cv::FILLED, cv::LINE_AA);
-  }
-  cv::line(img, Point(0, rng.uniform(40, 80)), Point(255, rng.uniform(20, 120)), Scalar(170, 165, 160), 3, cv::LINE_AA);
-  AddSmoothNoise(img, rng, 20, 8);
-  AddGrain(img, rng, 3.0);
-  return img;
-}
-
 cv::Mat MetalTexture(std::uint64_t seed) {
   cv::RNG rng = MakeRng(seed);
   cv::Mat img(128, 128, CV_8UC3, Scalar(105, 110, 110));

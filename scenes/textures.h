@@ -17,8 +17,6 @@ enum class FacadeStyle { kBrick, kConcrete, kGlass, kPlaster };
 // Sizes in pixels are noted; the builders choose the tile size in metres.
 cv::Mat BarkTexture(std::uint64_t seed);        // 256 x 256
 cv::Mat FoliageTexture(std::uint64_t seed);     // 512 x 512
-cv::Mat CarPaintTexture(std::uint64_t seed);    // 256 x 256, near white: tinted by rgba
-cv::Mat CarGlassTexture(std::uint64_t seed);    // 256 x 256
 cv::Mat MetalTexture(std::uint64_t seed);       // 128 x 128
 cv::Mat StopSignTexture(std::uint64_t seed);    // 256 x 256
 cv::Mat TrafficLightTexture(std::uint64_t seed);  // 128 x 256, three lamps

@@ -225,7 +225,8 @@ TEST_F(SweepCliTest, ShardsMergedEqualOneRun) {
   const CommandOutput whole = Run("sweep " + common + " --out " + (dir_ / "whole").string());
   ASSERT_EQ(whole.exit_code, 0) << whole.stderr_text;
   for (const char* file : {"sweep.json", "sweep_results.json", "report.md", "report.html", "figures/sweep_ate_pass1.png",
-                           "figures/sweep_localized_pass2.png", "figures/sweep_moving_features_pass1.png",
+                           "figures/sweep_localized_pass2.png", "figures/sweep_map_relative_pass2.png",
+                           "figures/sweep_map_relative_within_pass2.png", "figures/sweep_moving_features_pass1.png",
                            "points/office.people_walking=0/results.json",
                            "points/office.people_walking=2/results.json"}) {
     EXPECT_TRUE(fs::exists(dir_ / "whole" / file)) << file;
@@ -235,6 +236,7 @@ TEST_F(SweepCliTest, ShardsMergedEqualOneRun) {
   EXPECT_NE(table.find("![ATE, pass 1 against"), std::string::npos) << table;
   EXPECT_NE(table.find("| mutual/plain ATE p1 | mutual/plain ATE p2 | oracle/plain ATE p1 |"), std::string::npos)
       << table;
+  EXPECT_NE(table.find("| plain map-relative p2 [m] | plain within 0.1 m, 1 deg p2 |"), std::string::npos) << table;
   // Moving features: the sitter gestures, so tracks.json counts it moving at both points
   // (16 % of the features); the two walkers add to that.
   const nlohmann::json results = nlohmann::json::parse(ReadText(dir_ / "whole" / "sweep_results.json"));
