@@ -36,13 +36,8 @@ std::optional<Eigen::Isometry3d> GroundTruthAt(const std::vector<StampedPose>& g
   const auto after = std::lower_bound(groundtruth.begin(), groundtruth.end(), stamp_s,
                                       [](const StampedPose& pose, double s) { return pose.stamp_s < s; });
   if (after != groundtruth.end() && std::abs(after->stamp_s - stamp_s) < 1e-6) return after->T_wc;
-  if (after == groundtruth.begin() || after == groundtruth.end()) {
-    // Before the first or after the last pose: only a pose at the stamp itself will do.
-    if (after == groundtruth.begin() && after != groundtruth.end() && std::abs(after->stamp_s - stamp_s) < 1e-6) {
-      return after->T_wc;
-    }
-    return std::nullopt;
-  }
+  // Before the first or after the last pose: nothing to interpolate between.
+  if (after == groundtruth.begin() || after == groundtruth.end()) return std::nullopt;
   const StampedPose& before = *(after - 1);
   if (after->stamp_s - before.stamp_s > kMaxGroundTruthGapS) return std::nullopt;
   const double t = (stamp_s - before.stamp_s) / (after->stamp_s - before.stamp_s);

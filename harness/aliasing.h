@@ -159,8 +159,10 @@ struct AliasingSummary {
 // stage: "frames" (load, features, ground truth view) or "pairs".
 using AliasingProgress = std::function<void(const std::string& stage, int done, int total)>;
 
-// Measures one sequence. Needs groundtruth.txt (frames without a pose within 20 ms of
-// their stamp are skipped); masks/<rgb stem>.png are used when the sequence has masks/.
+// Measures one sequence. Needs groundtruth.txt: a frame's pose is the ground truth's at
+// its stamp, or interpolated between the two around it when they lie at most 0.1 s
+// apart, else the frame is skipped. masks/<rgb stem>.png are used when the sequence has
+// masks/ (every frame then needs one).
 // Throws segslam::Error on invalid options, a sequence without ground truth, unreadable
 // images or masks, and cancellation. Deterministic: the same sequence and options give
 // the same summary whatever the thread count.
