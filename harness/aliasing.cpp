@@ -116,8 +116,10 @@ struct PairFeatures {
   cv::Mat query_descriptors;  // rows of features with depth
   std::vector<cv::Point3f> query_points_cam;
   std::vector<cv::Point2f> query_pixels;
+  std::vector<std::uint16_t> query_instances;  // ground-truth instance under each, 0 = background
   cv::Mat train_descriptors;  // rows of all used features
   std::vector<cv::Point2f> train_pixels;
+  std::vector<std::uint16_t> train_instances;
 };
 
 cv::Mat LoadMaskIfAny(const TumSequence& sequence, size_t index) {
@@ -137,15 +139,19 @@ PairFeatures ExtractPairFeatures(const AliasingOptions& options, const slam::Orb
   std::vector<int> query_rows, train_rows;
   for (size_t k = 0; k < features.size(); ++k) {
     const cv::Point2f& pt = features.keypoints[k].pt;
-    if (options.background_features_only && !ids.empty()) {
+    std::uint16_t instance = 0;
+    if (!ids.empty()) {
       const int u = std::clamp(static_cast<int>(std::lround(pt.x)), 0, ids.cols - 1);
       const int v = std::clamp(static_cast<int>(std::lround(pt.y)), 0, ids.rows - 1);
-      if (ids.at<std::uint16_t>(v, u) != 0) continue;
+      instance = ids.at<std::uint16_t>(v, u);
     }
+    if (options.background_features_only && instance != 0) continue;
     train_rows.push_back(static_cast<int>(k));
     out.train_pixels.push_back(pt);
+    out.train_instances.push_back(instance);
     if (features.HasDepth(k)) {
       query_rows.push_back(static_cast<int>(k));
+      out.query_instances.push_back(instance);
       const Eigen::Vector3d& p = features.points_cam[k];
       out.query_points_cam.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()),
                                         static_cast<float>(p.z()));
@@ -185,6 +191,9 @@ PairVerification VerifyPair(const AliasingOptions& options, const PinholeCamera&
         !(n.best_distance < options.ratio * n.second_distance)) {
       continue;
     }
+    // The same object at both places is not a look-alike of itself.
+    const std::uint16_t instance = a.query_instances[q];
+    if (instance != 0 && instance == b.train_instances[static_cast<size_t>(n.best)]) continue;
     int& o = owner[static_cast<size_t>(n.best)];
     if (o < 0 || n.best_distance < nearest[static_cast<size_t>(o)].best_distance) o = static_cast<int>(q);
   }
@@ -249,6 +258,7 @@ bool CommonViewOptions::IsValid(std::string* error) const {
     return fail("common_view.depth_tolerance_share must lie in [0, 1)");
   }
   if (!(min_common_share > 0 && min_common_share < 1)) return fail("common_view.min_common_share must lie in (0, 1)");
+  if (!(far_apart_m >= 0)) return fail("common_view.far_apart_m must be >= 0");
   return true;
 }
 
@@ -319,6 +329,7 @@ bool AliasingOptions::IsValid(std::string* error) const {
   }
   if (ransac_samples < 1) return fail("ransac_samples must be >= 1");
   if (!(ransac_max_error_px > 0)) return fail("ransac_max_error_px must be > 0");
+  if (!(true_place_tolerance_m > 0)) return fail("true_place_tolerance_m must be > 0");
   if (threads < 0) return fail("threads must be >= 0");
   return true;
 }
@@ -331,11 +342,13 @@ nlohmann::json AliasingOptions::ToJson() const {
           {"depth_tolerance_m", common_view.depth_tolerance_m},
           {"depth_tolerance_share", common_view.depth_tolerance_share},
           {"min_common_share", common_view.min_common_share},
+          {"far_apart_m", common_view.far_apart_m},
           {"orb_features", orb.max_features},
           {"ratio", ratio},
           {"max_descriptor_distance", max_descriptor_distance},
           {"ransac_samples", ransac_samples},
           {"ransac_max_error_px", ransac_max_error_px},
+          {"true_place_tolerance_m", true_place_tolerance_m},
           {"background_features_only", background_features_only},
           {"loop_acceptance_matches", kLoopAcceptanceMatches}};
 }
@@ -351,6 +364,8 @@ nlohmann::json AliasingSummary::ToJson() const {
                      {"common_share", p.common_share},
                      {"ratio_matches", p.ratio_matches},
                      {"verified_matches", p.verified_matches},
+                     {"no_common_view", p.no_common_view},
+                     {"true_place", p.true_place},
                      {"pose_error_m", p.pose_error_m}});
   }
   return {{"sequence", sequence},
@@ -358,6 +373,7 @@ nlohmann::json AliasingSummary::ToJson() const {
           {"sampled_frames", sampled_frames},
           {"pairs_tested", pairs_tested},
           {"pairs_no_common_view", pairs_no_common_view},
+          {"pairs_measured", pairs_measured},
           {"max_verified_matches", max_verified_matches},
           {"p50", p50},
           {"p90", p90},
@@ -425,7 +441,10 @@ AliasingSummary MeasureAliasing(const AliasingOptions& options, const TumSequenc
     const GroundTruthView& view_a = views[static_cast<size_t>(a)];
     const GroundTruthView& view_b = views[static_cast<size_t>(b)];
     const ViewOverlap overlap = MeasureOverlap(options.common_view, camera, depth_range_m, view_a, view_b);
-    if (overlap.Share() < options.common_view.min_common_share) {
+    const double distance_m = (view_a.T_wc.translation() - view_b.T_wc.translation()).norm();
+    const bool no_common_view = overlap.Share() < options.common_view.min_common_share;
+    const bool far_apart = options.common_view.far_apart_m > 0 && distance_m >= options.common_view.far_apart_m;
+    if (no_common_view || far_apart) {
       const PairVerification verification =
           VerifyPair(options, camera, features[static_cast<size_t>(a)], features[static_cast<size_t>(b)]);
       AliasingPair pair;
@@ -433,7 +452,8 @@ AliasingSummary MeasureAliasing(const AliasingOptions& options, const TumSequenc
       pair.frame_b = sampled[static_cast<size_t>(b)].first;
       pair.stamp_a_s = sequence.entries()[static_cast<size_t>(pair.frame_a)].rgb_stamp_s;
       pair.stamp_b_s = sequence.entries()[static_cast<size_t>(pair.frame_b)].rgb_stamp_s;
-      pair.distance_m = (view_a.T_wc.translation() - view_b.T_wc.translation()).norm();
+      pair.distance_m = distance_m;
+      pair.no_common_view = no_common_view;
       pair.common_share = overlap.Share();
       pair.ratio_matches = static_cast<int>(verification.matches.size());
       pair.verified_matches = static_cast<int>(verification.inliers.size());
@@ -442,6 +462,8 @@ AliasingSummary MeasureAliasing(const AliasingOptions& options, const TumSequenc
         const Eigen::Vector3d estimated = verification.T_b_a->inverse().translation();
         const Eigen::Vector3d truth = (view_a.T_wc.inverse() * view_b.T_wc).translation();
         pair.pose_error_m = (estimated - truth).norm();
+        pair.true_place = pair.pose_error_m < options.true_place_tolerance_m;
+        if (pair.true_place) pair.verified_matches = 0;
       }
       results[static_cast<size_t>(k)] = pair;
     }
@@ -458,11 +480,12 @@ AliasingSummary MeasureAliasing(const AliasingOptions& options, const TumSequenc
   std::vector<AliasingPair> measured;
   for (const std::optional<AliasingPair>& result : results) {
     if (!result) continue;
+    if (result->no_common_view) ++summary.pairs_no_common_view;
     verified.push_back(result->verified_matches);
     measured.push_back(*result);
     if (result->verified_matches >= kLoopAcceptanceMatches) ++summary.pairs_at_or_above_acceptance;
   }
-  summary.pairs_no_common_view = static_cast<std::int64_t>(measured.size());
+  summary.pairs_measured = static_cast<std::int64_t>(measured.size());
   std::sort(verified.begin(), verified.end());
   if (!verified.empty()) summary.max_verified_matches = verified.back();
   summary.p50 = NearestRank(verified, 50);

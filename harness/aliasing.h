@@ -49,6 +49,12 @@ struct CommonViewOptions {
   // the image, and more than the handful of points that depth noise at an occluding edge
   // lets through. (0, 1).
   double min_common_share = 0.005;
+  // Pairs whose cameras stand at least this far apart are measured too, whatever they
+  // share far off: down a straight avenue every frame sees, tiny and without depth, the
+  // facades the frames 200 m on see up close, so no pair of it shares "no view", yet a
+  // loop detector there is as exposed to look-alikes. (The figures took pairs 40 m
+  // apart.) 0: only pairs with no common view. >= 0.
+  double far_apart_m = 40.0;
 
   bool IsValid(std::string* error) const;
 };
@@ -116,10 +122,16 @@ struct AliasingOptions {
   // matches give the same inliers.
   int ransac_samples = 300;
   float ransac_max_error_px = 4.0f;
-  // Features on ground-truth background only (mask 0; every feature when the sequence
-  // has no masks): the measure is about what the static world offers. A car seen at two
-  // places is common content, not aliasing; false counts features on instances too.
-  bool background_features_only = true;
+  // A consensus whose pose puts camera b within this of its true place relative to a
+  // (m) is the same place seen from afar, a true match, not a look-alike: such a pair
+  // counts 0 verified matches (AliasingPair::true_place). > 0.
+  double true_place_tolerance_m = 1.0;
+  // false: every feature counts, as a loop detector sees them, but a match between two
+  // features on the same instance does not: the same object seen at both places (a car
+  // the camera follows) is common content, where a second truck in the same livery is a
+  // look-alike. true: features on ground-truth background (mask 0) only. Without masks
+  // every feature counts either way.
+  bool background_features_only = false;
   int threads = 0;                            // worker threads; 0 = all cores
   const std::atomic<bool>* cancel = nullptr;  // set to true to stop (throws "cancelled")
 
@@ -127,15 +139,19 @@ struct AliasingOptions {
   nlohmann::json ToJson() const;  // the effective settings, for reports
 };
 
-// One pair of sampled frames that share no view.
+// One measured pair of sampled frames: no common view, or far apart.
 struct AliasingPair {
   int frame_a = 0;  // sequence indices, a < b; a's features with depth give the 3D points
   int frame_b = 0;
   double stamp_a_s = 0, stamp_b_s = 0;
   double distance_m = 0;      // ground truth, between the camera centres
-  double common_share = 0;    // ViewOverlap::Share() (< min_common_share)
+  bool no_common_view = false;  // else measured as far apart
+  double common_share = 0;    // ViewOverlap::Share()
   int ratio_matches = 0;      // pass the ratio test and the distance limit
-  int verified_matches = 0;   // RANSAC PnP inliers among them
+  // RANSAC PnP inliers among them at a wrong pose: 0 when the pose is within
+  // true_place_tolerance_m of the truth (true_place).
+  int verified_matches = 0;
+  bool true_place = false;
   // How far from its true place the PnP pose puts camera b (m); -1 without a pose.
   double pose_error_m = -1;
 };
@@ -146,7 +162,8 @@ struct AliasingSummary {
   int sampled_frames = 0;
   std::int64_t pairs_tested = 0;        // all pairs of sampled frames
   std::int64_t pairs_no_common_view = 0;
-  // Over the pairs with no common view (0 when there are none).
+  std::int64_t pairs_measured = 0;  // no common view, or at least far_apart_m apart
+  // Over the measured pairs (0 when there are none).
   int max_verified_matches = 0;
   int p50 = 0, p90 = 0, p99 = 0;  // nearest-rank percentiles of verified matches
   std::int64_t pairs_at_or_above_acceptance = 0;  // verified >= kLoopAcceptanceMatches

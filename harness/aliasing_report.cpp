@@ -36,6 +36,7 @@ nlohmann::json ManifestAliasingSummary(const AliasingOptions& options,
   for (const auto& [name, summary] : passes) {
     nlohmann::json pass = {{"sampled_frames", summary.sampled_frames},
                            {"pairs_no_common_view", summary.pairs_no_common_view},
+                           {"pairs_measured", summary.pairs_measured},
                            {"max_verified_matches", summary.max_verified_matches},
                            {fmt::format("pairs_at_or_above_{}", kLoopAcceptanceMatches),
                             summary.pairs_at_or_above_acceptance}};
@@ -49,8 +50,8 @@ nlohmann::json ManifestAliasingSummary(const AliasingOptions& options,
 }
 
 std::string AliasingTable(const std::vector<std::pair<std::string, AliasingSummary>>& passes) {
-  std::string table = fmt::format("{:<8} {:>7} {:>7} {:>9} {:>9} {:>5} {:>5} {:>5} {:>5} {:>6}  {}\n", "pass",
-                                  "frames", "sampled", "pairs", "no view", "p50", "p90", "p99", "max",
+  std::string table = fmt::format("{:<8} {:>7} {:>7} {:>9} {:>9} {:>9} {:>5} {:>5} {:>5} {:>5} {:>6}  {}\n", "pass",
+                                  "frames", "sampled", "pairs", "no view", "measured", "p50", "p90", "p99", "max",
                                   fmt::format(">={}", kLoopAcceptanceMatches),
                                   "worst pair: frames, true distance, PnP pose error");
   for (const auto& [name, s] : passes) {
@@ -60,8 +61,8 @@ std::string AliasingTable(const std::vector<std::pair<std::string, AliasingSumma
       worst = fmt::format("{}-{}, {:.1f} m apart, ", w.frame_a, w.frame_b, w.distance_m);
       worst += w.pose_error_m >= 0 ? fmt::format("pose {:.1f} m off", w.pose_error_m) : std::string("no pose");
     }
-    table += fmt::format("{:<8} {:>7} {:>7} {:>9} {:>9} {:>5} {:>5} {:>5} {:>5} {:>6}  {}\n", name, s.frames,
-                         s.sampled_frames, s.pairs_tested, s.pairs_no_common_view, s.p50, s.p90, s.p99,
+    table += fmt::format("{:<8} {:>7} {:>7} {:>9} {:>9} {:>9} {:>5} {:>5} {:>5} {:>5} {:>6}  {}\n", name, s.frames,
+                         s.sampled_frames, s.pairs_tested, s.pairs_no_common_view, s.pairs_measured, s.p50, s.p90, s.p99,
                          s.max_verified_matches, s.pairs_at_or_above_acceptance, worst);
   }
   return table;

@@ -35,8 +35,9 @@ struct BenchAliasingArgs {
   int every_frames = AliasingOptions().sample_every_frames;
   int ransac_samples = AliasingOptions().ransac_samples;
   double min_common_share = AliasingOptions().common_view.min_common_share;
+  double far_apart_m = AliasingOptions().common_view.far_apart_m;
   int threads = 0;
-  bool all_features = false;
+  bool background_only = false;
 };
 
 int RunBenchAliasing(const BenchAliasingArgs& args) {
@@ -46,7 +47,8 @@ int RunBenchAliasing(const BenchAliasingArgs& args) {
   options.sample_every_frames = args.every_frames;
   options.ransac_samples = args.ransac_samples;
   options.common_view.min_common_share = args.min_common_share;
-  options.background_features_only = !args.all_features;
+  options.common_view.far_apart_m = args.far_apart_m;
+  options.background_features_only = args.background_only;
   options.threads = args.threads;
   options.cancel = InstallInterruptFlag();
   if (std::string problem; !options.IsValid(&problem)) throw Error("bench aliasing: " + problem);
@@ -55,14 +57,15 @@ int RunBenchAliasing(const BenchAliasingArgs& args) {
   const auto start = std::chrono::steady_clock::now();
   const auto passes = MeasureAliasingOfFolder(options, args.dataset, args.camera_file, true);
   fmt::print("aliasing of {}: a frame every {} m or {} deg of ground-truth motion{}, all pairs of them; pairs with no "
-             "common view (under {} % of either frame's background points seen by the other) matched with {} ORB "
-             "features{}, ratio {}, RANSAC PnP ({} samples, {} px); a loop detector accepts about {} verified "
-             "matches\n",
+             "common view (under {} % of either frame's background points seen by the other) or {} m apart or more, "
+             "matched with {} ORB features{}, ratio {}, RANSAC PnP ({} samples, {} px), counted at a pose more than {} m "
+             "from the truth; a loop detector accepts about {} verified matches\n",
              args.dataset, options.sample_spacing_m, options.sample_turn_deg,
              options.sample_every_frames > 0 ? fmt::format(" or {} frames", options.sample_every_frames) : "",
-             100.0 * options.common_view.min_common_share, options.orb.max_features,
-             options.background_features_only ? " (on background where there are masks)" : "", options.ratio, options.ransac_samples,
-             options.ransac_max_error_px, kLoopAcceptanceMatches);
+             100.0 * options.common_view.min_common_share, options.common_view.far_apart_m, options.orb.max_features,
+             options.background_features_only ? " (on background where there are masks)"
+                                              : " (a match within one instance not counted)", options.ratio, options.ransac_samples,
+             options.ransac_max_error_px, options.true_place_tolerance_m, kLoopAcceptanceMatches);
   fmt::print("{}", AliasingTable(passes));
 
   if (!args.pictures_dir.empty()) {
@@ -112,13 +115,19 @@ void AddBenchAliasingCommand(CLI::App& bench, std::function<int()>* action) {
                       "RANSAC PnP samples per pair (ORB-SLAM2's loop closing: 300; relocalization here: 2000)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
+  command->add_option("--far-apart", args->far_apart_m,
+                      "Also measure pairs whose cameras are at least this many metres apart, whatever they share far "
+                      "off (0: only pairs with no common view)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   command->add_option("--min-common-share", args->min_common_share,
                       "Pairs with a smaller share of either frame's background points seen by the other share no "
                       "view")
       ->check(CLI::Range(1e-6, 0.999999))
       ->capture_default_str();
-  command->add_flag("--all-features", args->all_features,
-                    "Match features on instances too (default: ground-truth background only, when masks exist)");
+  command->add_flag("--background-only", args->background_only,
+                    "Match features on ground-truth background only (default: every feature; a match between two "
+                    "features on the same instance, the same object at both places, is not counted)");
   command->add_option("--threads", args->threads, "Worker threads (0 = all cores)")->check(CLI::NonNegativeNumber);
   command->add_option("--json", args->json_file, "Also write the results as JSON");
   command->add_option("--pictures", args->pictures_dir,

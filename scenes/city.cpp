@@ -604,8 +604,9 @@ class CityBuilder {
     const double yaw = YawOf(d);
     const double clear = road_ / 2 + 4.0;  // past the crosswalks
     const double len = block_ - 2 * clear;
-    // Centre line: dashes 3 m long every 9 m (painted into the street's surface).
-    for (double s = clear; s + 3.0 <= block_ - clear + 1e-9; s += 9.0) {
+    // Centre line: dashes 3 m long every 9 m (painted into the street's surface), from
+    // where the last repainting happened to start.
+    for (double s = clear + Uniform(rng, 0, 6); s + 3.0 <= block_ - clear + 1e-9; s += 9.0) {
       markings_.push_back({pa + d * (s + 1.5), Vec2(1.5, 0.075), yaw});
     }
     // The parking lanes' lines along both curbs.
@@ -659,17 +660,28 @@ class CityBuilder {
 
   void MakeIntersection(std::mt19937_64& rng, const Node& n) {
     const Vec2 c = NodePos(n);
-    // Crosswalks on all four arms: stripes 3 m long along the street, 0.5 m wide, one
-    // every metre across it; a stop line before the crosswalk on the incoming lane.
+    // Crosswalks on the arms, each painted to its own measure as crossings are (some
+    // arms have none, some a ladder's side bars), so that no two intersections show the
+    // same pattern of stripe corners; a stop line before each on the incoming lane.
+    std::mt19937_64 paint = Rng("crosswalks", static_cast<std::uint64_t>((n.first + 1000) * 4096 + (n.second + 1000)));
     for (const Vec2& d : kStreetDirs) {
-      const Vec2 p = c + d * (road_ / 2 + 2.0);
-      const double half_width = road_ / 2 - 0.6;
-      const int stripes = static_cast<int>(std::floor(2 * half_width));
-      for (int k = 0; k < stripes; ++k) {
-        const double across = -half_width + 0.5 + k + 0.5 * (2 * half_width - stripes);
-        markings_.push_back({p + Right(d) * across, Vec2(1.5, 0.25), YawOf(d)});
+      const double stop_half = Uniform(paint, 0.15, 0.25);
+      markings_.push_back({c + d * (road_ / 2 + kStopLineM) + Right(-d) * (road_ / 4), Vec2(stop_half, road_ / 4 - 0.3), YawOf(d)});
+      if (Chance(paint, 0.15)) continue;
+      const double length = Uniform(paint, 2.4, 3.2);
+      const double from_edge = Uniform(paint, 0.3, kStopLineM - stop_half - 0.2 - length);
+      const Vec2 p = c + d * (road_ / 2 + from_edge + length / 2);
+      const double half_width = road_ / 2 - Uniform(paint, 0.4, 1.0);
+      const double stripe = Uniform(paint, 0.4, 0.6), pitch = stripe + Uniform(paint, 0.35, 0.7);
+      for (double across = -half_width + Uniform(paint, 0, pitch - stripe) + stripe / 2; across + stripe / 2 <= half_width;
+           across += pitch) {
+        markings_.push_back({p + Right(d) * across, Vec2(length / 2, stripe / 2), YawOf(d)});
       }
-      markings_.push_back({c + d * (road_ / 2 + 4.0) + Right(-d) * (road_ / 4), Vec2(0.2, road_ / 4 - 0.3), YawOf(d)});
+      if (Chance(paint, 0.3)) {  // a ladder: bars along both ends of the stripes
+        for (double end : {-1.0, 1.0}) {
+          markings_.push_back({p + d * (end * (length / 2 + 0.1)), Vec2(0.08, half_width), YawOf(d)});
+        }
+      }
     }
     // Near the route: traffic lights at two corners, or a stop sign.
     bool near_route = false;

@@ -2,6 +2,7 @@
 // fixture sim_datasets): short sequences, so the thresholds are those of the issue where
 // they make sense at this length, and the full-length figures come from `segslam run`
 // (README). Every test prints its figures (ctest -V shows them).
+#include "harness/map_relative_error.h"
 #include "harness/slam_runner.h"
 #include "harness/trajectory_metrics.h"
 
@@ -229,12 +230,23 @@ TEST(SlamRunTest, SecondPassLocalizesOnTheFirstPassMap) {
   slam::SaveLongTermMap(map_file, pass1.run.long_term_map);
   const Scored pass2 = RunAndScore(dataset / "pass2", slam::SlamMode::kMutual, map_file, pass1.ate.T_gt_est);
   fs::remove(map_file);
-  // A static city: every frame localizes, and pass 2 in pass 1's map frame is held to
-  // pass 1's own criterion (0.3 % of the route).
+  // A static city: every frame localizes, and pass 2 against pass 1's estimate at the
+  // same place is held to pass 1's own criterion (0.3 % of the route). Not the ATE in
+  // pass 1's aligned frame: these 120 frames drive straight, and Horn's alignment of a
+  // straight pass 1 leaves its roll about the road free (here it took 30 degrees), which
+  // moves pass 2, half a metre beside it, by a quarter metre whatever SLAM did.
   EXPECT_EQ(pass2.run.LocalizedShare(), 1.0);
   EXPECT_EQ(pass2.run.frames.front().status, slam::TrackingStatus::kRelocalized);
-  const double route_m = PathLength(TumSequence::Open(dataset / "pass2").groundtruth());
-  EXPECT_LT(pass2.ate.translation_m.rmse, 0.003 * route_m);
+  const TumSequence sequence1 = TumSequence::Open(dataset / "pass1"), sequence2 = TumSequence::Open(dataset / "pass2");
+  std::vector<double> pass2_stamps_s;
+  for (const auto& entry : sequence2.entries()) pass2_stamps_s.push_back(entry.rgb_stamp_s);
+  const MapRelativeResult relative = ComputeMapRelativeError(sequence1.groundtruth(), pass1.run.trajectory, pass2_stamps_s,
+                                                             sequence2.groundtruth(), pass2.run.trajectory);
+  ASSERT_TRUE(relative.translation_m.has_value());
+  EXPECT_EQ(relative.frames_with_place, static_cast<int>(pass2_stamps_s.size()));
+  const double route_m = PathLength(sequence2.groundtruth());
+  EXPECT_LT(relative.translation_m->rmse, 0.003 * route_m);
+  EXPECT_LT(relative.rotation_deg->rmse, 1.0);
 }
 
 TEST(SlamRunTest, MapFromAnotherCameraIsRefused) {

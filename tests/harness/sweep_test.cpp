@@ -236,7 +236,7 @@ TEST_F(SweepCliTest, ShardsMergedEqualOneRun) {
   EXPECT_NE(table.find("![ATE, pass 1 against"), std::string::npos) << table;
   EXPECT_NE(table.find("| mutual/plain ATE p1 | mutual/plain ATE p2 | oracle/plain ATE p1 |"), std::string::npos)
       << table;
-  EXPECT_NE(table.find("| plain map-relative p2 [m] | plain within 0.1 m, 1 deg p2 |"), std::string::npos) << table;
+  EXPECT_NE(table.find("| plain map-relative p2 \\[m\\] | plain within 0.1 m, 1 deg p2 |"), std::string::npos) << table;
   // Moving features: the sitter gestures, so tracks.json counts it moving at both points
   // (16 % of the features); the two walkers add to that.
   const nlohmann::json results = nlohmann::json::parse(ReadText(dir_ / "whole" / "sweep_results.json"));
