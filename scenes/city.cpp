@@ -18,7 +18,6 @@
 #include <cmath>
 #include <functional>
 #include <limits>
-#include <memory>
 #include <optional>
 #include <set>
 #include <stdexcept>
@@ -129,13 +128,17 @@ class CityBuilder {
   }
 
   // ---- Textures and materials ------------------------------------------------------
+  // The size in pixels of a picture of `size_m` at `px_per_m` (at least 2 x 2).
+  static cv::Size PixelsFor(const Vec2& size_m, double px_per_m) {
+    return cv::Size(std::max(2, static_cast<int>(std::lround(size_m.x() * px_per_m))),
+                    std::max(2, static_cast<int>(std::lround(size_m.y() * px_per_m))));
+  }
+
   // A picture of one place (a street, a facade, a plate) drawn at `px_per_m` over a
   // box face of `size_m`; returns its material. The pictures are packed into a few
   // textures and drawn, in parallel, at the end of Build() (scenes/picture_pages.h).
   int AddPicture(const std::string& name, const Vec2& size_m, double px_per_m, std::function<cv::Mat()> draw) {
-    const cv::Size size_px(std::max(2, static_cast<int>(std::lround(size_m.x() * px_per_m))),
-                           std::max(2, static_cast<int>(std::lround(size_m.y() * px_per_m))));
-    return pictures_.Add(b_, name, size_px, size_m, std::move(draw));
+    return pictures_.Add(b_, name, PixelsFor(size_m, px_per_m), size_m, std::move(draw));
   }
   // A picture drawn at a fixed size in pixels (plates, signs).
   int AddPicture(const std::string& name, const Vec2& size_m, cv::Size size_px, std::function<cv::Mat()> draw) {
@@ -782,14 +785,12 @@ class CityBuilder {
     // windows), each picture as large as the largest face it covers.
     const auto paint_of = [&](const std::string& name, const Vec2& size_m, const Eigen::Vector4f& rgba, std::uint64_t index) {
       const std::uint64_t seed = SubSeed(vehicle_seed, name, index);
-      const cv::Size px(std::max(2, static_cast<int>(std::lround(size_m.x() * kVehiclePxPerM))),
-                        std::max(2, static_cast<int>(std::lround(size_m.y() * kVehiclePxPerM))));
+      const cv::Size px = PixelsFor(size_m, kVehiclePxPerM);
       return pictures_.Add(b_, name, px, size_m, [seed, px] { return VehiclePaintTexture(seed, px); }, rgba, 0.5f, 0.5f);
     };
     const auto glass_of = [&](const Vec2& size_m) {
       const std::uint64_t seed = SubSeed(vehicle_seed, "glass");
-      const cv::Size px(std::max(2, static_cast<int>(std::lround(size_m.x() * kVehiclePxPerM))),
-                        std::max(2, static_cast<int>(std::lround(size_m.y() * kVehiclePxPerM))));
+      const cv::Size px = PixelsFor(size_m, kVehiclePxPerM);
       return pictures_.Add(b_, "car_glass", px, size_m, [seed, px] { return VehicleGlassTexture(seed, px); },
                            Eigen::Vector4f::Ones(), 0.6f);
     };

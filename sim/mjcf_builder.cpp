@@ -207,6 +207,11 @@ class AssetSection {
                          mesh, g.material, pose);
     }
     std::string material = fmt::format("mat{}", g.material);
+    if (textured && g.shape == scenes::Shape::kPlane && mat.texture_tile_m.x() > 0) {
+      // A plane repeats its material's whole texture; a window of one is for boxes only.
+      throw Error(fmt::format("world '{}': plane geom {} has material '{}' with a texture window (boxes only)",
+                              world_.name, id, mat.name));
+    }
     if (textured && g.shape == scenes::Shape::kPlane) {
       const Eigen::Vector2d& tile = world_.textures[mat.texture].tile_size_m;
       material = fmt::format("mat{}_plane{}", g.material, id);
