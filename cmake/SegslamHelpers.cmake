@@ -1,11 +1,26 @@
-# segslam_add_library(NAME SRCS ... PUBLIC_LINK ... PRIVATE_LINK ...)
+include(GNUInstallDirs)
+
+# segslam_add_library(NAME [INSTALL] SRCS ... PUBLIC_LINK ... PRIVATE_LINK ...)
 # One static library per top folder; include paths are rooted at the repository so
-# headers are included as "core/camera.h".
+# headers are included as "core/camera.h". Linked as segslam::NAME, in this build and
+# by another project through find_package(segslam). INSTALL puts the library and the
+# folder's headers (all but *_internal.h) in `cmake --install`'s tree, in the export set
+# segslamTargets (cmake/segslamConfig.cmake.in).
 function(segslam_add_library NAME)
-  cmake_parse_arguments(ARG "" "" "SRCS;PUBLIC_LINK;PRIVATE_LINK" ${ARGN})
+  cmake_parse_arguments(ARG "INSTALL" "" "SRCS;PUBLIC_LINK;PRIVATE_LINK" ${ARGN})
   add_library(segslam_${NAME} STATIC ${ARG_SRCS})
-  target_include_directories(segslam_${NAME} PUBLIC ${PROJECT_SOURCE_DIR})
+  add_library(segslam::${NAME} ALIAS segslam_${NAME})
+  set_target_properties(segslam_${NAME} PROPERTIES EXPORT_NAME ${NAME})
+  target_include_directories(segslam_${NAME} PUBLIC
+    $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}>
+    $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}/segslam>)
   target_link_libraries(segslam_${NAME} PUBLIC ${ARG_PUBLIC_LINK} PRIVATE ${ARG_PRIVATE_LINK})
+  if(ARG_INSTALL)
+    install(TARGETS segslam_${NAME} EXPORT segslamTargets ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR})
+    install(DIRECTORY ${CMAKE_CURRENT_SOURCE_DIR}/
+            DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/segslam/${NAME}
+            FILES_MATCHING PATTERN "*.h" PATTERN "*_internal.h" EXCLUDE)
+  endif()
 endfunction()
 
 # segslam_add_test(NAME SRCS ... LINK ... [LABELS ...] [TIMEOUT s] [FIXTURE name])
