@@ -15,15 +15,8 @@
 // frame, so the initial instances come back as they are, with fresh ids from the same
 // refiner (ids are never reused within a loop).
 //
-// Moving objects are projected with the camera motion only, as in the paper. An own
-// rigid motion per moving instance (world shift of its depth centroid between its
-// previous refined region and the nearest current region of its class) was measured
-// and left out: refined - camera-only, mAP / mIoU points, fcis-like, 80 frames, seeds
-// 1/2/3: office +0.3/+0.5/-0.1 and +0.1/+0.1/-0.5, city +0.0/+0.0/+0.1 and
-// -0.3/+0.0/+0.1; full-length seed 1 office_walking_xyz +0.3 / +0.1, city +0.0 / -0.2.
-// Even the true object motion gains only about 1 point (seg-eval, office_seg pass1:
-// +0.9 mAP, +1.0 mIoU), since the refiner's matching tolerates the shift of a walker
-// or car over one frame.
+// Moving objects are projected with the camera's motion only, as in the paper: an own
+// rigid motion per moving instance gained nothing measurable (docs/tuning.md).
 #pragma once
 
 #include <optional>

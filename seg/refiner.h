@@ -78,10 +78,8 @@ struct RefinerOptions {
   // people down a long street) is projected at the farthest depth measured in the
   // previous frame (true) or not projected (false, the paper). Its true depth is at
   // least that far, so the camera's translation moves it at most as much as it moves the
-  // far limit, and rotation, which is exact at any depth, does the rest. Without it such
-  // regions are "new" in every frame and a missed one is never added back: on the
-  // boulevard (40 m far limit) 2040 of pass 1's and 5415 of pass 2's true detections;
-  // with it, seg-eval with true poses gives refined mAP pass 2 68.7 instead of 67.9.
+  // far limit, and rotation, which is exact at any depth, does the rest; without it such
+  // regions are "new" in every frame (docs/tuning.md).
   bool project_depthless_regions_at_far_limit = true;
   // Each projected point is splatted into an axis-aligned footprint: the image of its
   // source pixel under the local warp Jacobian (fronto-parallel assumption), times this
@@ -104,56 +102,37 @@ struct RefinerOptions {
   double occlusion_tolerance = 0.1;
   // Projected points nearer than this (metres, > 0) are dropped (behind/at the camera).
   double min_depth_m = 0.05;
-  // Projected regions smaller than this (pixels, >= 0) are not added back. 1 (was 64
-  // px = 8x8, when any projection was added): far objects are 2-60 px, and once only
-  // confirmed tracks are added (min_detections_to_add) a small projection is as good
-  // evidence of a missed instance as a large one. seg-eval with true poses, boulevard
-  // refined mAP pass 1 / 2: 64 px 68.2 / 67.0, 4 px 69.5 / 68.7, 1 px 69.6 / 68.7
-  // (measured before the overlap rule of ProjectRegions).
+  // Projected regions smaller than this (pixels, >= 0) are not added back. 1: far
+  // objects are 2-60 px, and once only confirmed tracks are added
+  // (min_detections_to_add) a small projection is as good evidence of a missed instance
+  // as a large one (docs/tuning.md).
   int min_projected_area_px = 1;
   // The same for a region projected at the far limit (it had no depth, see
   // project_depthless_regions_at_far_limit), pixels >= 0. 16: far objects that shrink
-  // below what the segmenter finds left 1-15 px ghosts at an assumed depth; with the
-  // clean preset (perfect masks) on the 80-frame city test dataset 1 px lowered refined
-  // mIoU to 94.1 / 91.7 (passes 1 / 2), 16 px keeps 99.9 / 99.7; boulevard refined mAP
-  // (seg-eval, true poses) pass 1 / 2: 1 px 69.6 / 68.8, 16 px 69.3 / 68.5.
+  // below what the segmenter finds left 1-15 px ghosts at an assumed depth.
   int min_far_projected_area_px = 16;
-  // Projected regions smaller than this (pixels, >= 0) are not matched. 1 (was 64 px):
-  // far objects (traffic lights, pedestrians down the street in the city) are 2-60 px;
-  // left unmatched they became "new" every frame and lost their track.
+  // Projected regions smaller than this (pixels, >= 0) are not matched. 1: far objects
+  // (traffic lights, pedestrians down the street) are 2-60 px; left unmatched they
+  // became "new" every frame and lost their track.
   int min_matched_area_px = 1;
 
   // --- Decisions (Algorithm 1).
-  // Documented deviation from the paper, measured with ground-truth poses on the
-  // shipped city (both passes) and office_walking_xyz (150 frames, fcis-like, seeds 1-3):
-  // the paper replaces Re_c by Re_p whenever I/|Re_c| < I/|Re_p|, i.e. whenever the
-  // current region is larger than the projection. That fires on most GOOD regions (the
-  // projection of a projection loses 1-px slivers of thin parts (poles, limbs), lags
-  // objects that grow as the camera approaches, that are revealed from behind an
-  // occluder or enter at the border, and articulated limbs move relative to the root
-  // motion), so refined masks drift: mAP fell by 19-37 points (office pass1 62.2 -> 30.4)
-  // and the clean preset fell to mAP 0.50. Three guards make the rule safe:
+  // The paper replaces Re_c by Re_p whenever I/|Re_c| < I/|Re_p|, i.e. whenever the
+  // current region is the larger. That fires on most good regions (a projection loses
+  // slivers of thin parts, lags objects that grow, come out from behind an occluder or
+  // in at the border), and refined masks drift; three guards make the rule safe
+  // (docs/tuning.md has the figures):
   // (1) the ratios count a pixel of one region as in the other when it lies within
-  //     boundary_tolerance_px of it (in [0, 16]; 0 = exact intersection, the paper). 2:
-  //     projection with noisy depth is accurate to ~1-2 px; this alone lifts the clean
-  //     preset from mAP 0.54 to 0.81 (city, gap 0.1);
+  //     boundary_tolerance_px of it, in [0, 16]; 0 = exact (the paper). 2: projection
+  //     with noisy depth is accurate to 1-2 px;
   // (2) replace only when I/|Re_p| - I/|Re_c| > replace_min_ratio_gap, in [0, 1); 0 =
-  //     the paper's rule. Measured (fcis-like, mean over seeds, city p1 / office p1 mAP
-  //     change): gap 0.05 -3.1 / -3.7, 0.15 -2.5 / +0.7, 0.45 +5.1 / +5.0, never
-  //     (0.99) +5.4 / +5.9. Even with a clean segmenter 3-5% of correct regions show a
-  //     gap above 0.15 (growth, disocclusion, limbs), while a bleeding region of the
-  //     segmenter (width <= 0.1 sqrt(area)) rarely reaches more than 0.3 once the 2 px
-  //     tolerance is granted, so the rule can only pay off for gross over-segmentation
-  //     (blobs into a neighbour): 0.45 keeps it for those, and keeps the clean preset at
-  //     mAP >= 0.995;
+  //     the paper. 0.45: a segmenter's bleeding seldom reaches 0.3 once the tolerance is
+  //     granted, while a correct region that grew often passes 0.15, so the rule acts
+  //     only on gross over-segmentation (blobs into a neighbour);
   // (3) "replace" keeps the current region's pixels within boundary_tolerance_px of
   //     Re_p (Re_c AND dilate(Re_p)) instead of taking Re_p itself
   //     (trim_instead_of_replace; needs a tolerance > 0): the oversized part is cut off
-  //     while the current boundary, sharper than a projection, stays. At gap 0.15,
-  //     refined - raw mAP city p1 / p2 / office p1 / p2: taking Re_p -5.2 / -7.7 /
-  //     -12.2 / -18.5, trimming -2.5 / +0.2 / +0.7 / +0.1.
-  // (These figures were taken with the paper's count rule for adding and no dropping
-  // of new regions, see below; tolerance 2 throughout.)
+  //     while the current boundary, sharper than a projection, stays.
   double replace_min_ratio_gap = 0.45;
   int boundary_tolerance_px = 2;
   bool trim_instead_of_replace = true;
@@ -162,14 +141,7 @@ struct RefinerOptions {
   // RefinerInput::current_depth_m). The segmenter's bleeding lands mostly on what lies
   // behind an object, while a region that really grew (an object stepping in at the
   // border or out from behind another) keeps its depth, which the plain trim cut back to
-  // the last frame's extent. seg-eval with true poses, refined mAP: clean preset, office
-  // pass 2 (noise-free, 40 frames) 92.2 -> 100, office_seg pass 2 (80 frames) 96.4 ->
-  // 100, pass 1 99.5 -> 100; fcis-like seeds 1-3, mean change office p1 / p2 / city p1 /
-  // p2 +1.0 / -0.2 / +1.1 / +0.1 (mIoU within 0.7 either way). In the mutual loop (SLAM
-  // poses), refined mAP, off -> on: office_walking_xyz fcis-like (2 seeds) p1 69.7 ->
-  // 71.7, p2 66.9 -> 67.8, at half its errors 90.1 -> 91.4; city_street_grid (seeds 1-3)
-  // +0.5 to +1.5 on both passes; mIoU within 0.3, and SLAM's ATE unchanged up to the
-  // preset's errors (README: segmentation_strength).
+  // the last frame's extent.
   bool trim_keeps_region_depth = true;
   // Extension (off = paper): also replace Re_c by Re_p when Re_c lies inside the
   // projection (I/|Re_c| >= repair_min_current_inside) but covers too little of it
@@ -178,22 +150,16 @@ struct RefinerOptions {
   double repair_min_current_inside = 0.95;    // in (0, 1]
   double repair_max_projected_covered = 0.9;  // in (0, 1]
   // When an unmatched projected region is added (with its previous track id and
-  // category). kAlways, a documented deviation: the paper's count rule
-  // (#regions^{t-1} > #regions^t) rarely holds when the segmenter also makes false
-  // positives (2.5 a frame for fcis-like), which hide a missed instance from the count;
-  // the per-region rule with the score decay below (a ghost lives <= 5 frames) measured
-  // +0.9 to +1.5 points of mAP over the count rule (80-frame city/office, seeds 1-3)
-  // for -0.2 to +0.8 of mIoU.
+  // category). kAlways, a deviation: the paper's count rule (#regions^{t-1} >
+  // #regions^t) seldom holds when the segmenter also makes false positives, which hide
+  // a missed instance from the count; the score decay below ends a ghost within 5
+  // frames.
   AddUnmatchedRule add_unmatched = AddUnmatchedRule::kAlways;
   // ...and only for a track that the segmenter has detected (matched or new) in at
-  // least this many frames, >= 1 (1 = any track). 2 (an extension, as trackers confirm
-  // a track after a second hit): a false positive of the segmenter is seldom detected
-  // twice, and carried on by projection it cost pixels and precision for up to 5 frames.
-  // Tracks of a previous segmentation that this refiner did not make count as confirmed.
-  // seg-eval with true poses (fcis-like, seed 1), refined mIoU / mAP, 1 -> 2: boulevard
-  // pass 2 68.3 -> 76.6 / 68.7 -> 68.8, office_sitting_xyz pass 2 73.0 -> 75.6 /
-  // 73.5 -> 71.4, office_walking_xyz pass 2 68.6 -> 74.6 / 68.9 -> 68.2: the ghosts'
-  // pixels cost far more mIoU than the few missed twice-unseen instances cost mAP.
+  // least this many frames, >= 1 (1 = any track). 2, as trackers confirm a track after
+  // a second hit: a false positive of the segmenter is seldom detected twice, and carried
+  // on by projection it cost pixels and precision for up to 5 frames. Tracks of a
+  // previous segmentation that this refiner did not make count as confirmed.
   int min_detections_to_add = 2;
   // An added region's score is its previous score times this decay, in (0, 1]; 0.8: a
   // region carried by projection alone loses confidence each frame...
@@ -209,21 +175,15 @@ struct RefinerOptions {
   // current score.
   double matched_previous_score_weight = 0.0;
   // A current region without match (and with a previous frame to match against) scores
-  // its current score times this factor, in (0, 1]; 1 = unchanged. Measured together
-  // with matched_previous_score_weight = 1 (gap 0.99): 0.5 cost 1-7 points of mAP on
-  // city and office: far objects without depth (beyond the sensor's range) have no
-  // projection, are "new" in every frame and were ranked below false positives, and
-  // halved scores make added regions fall under min_added_score sooner.
+  // its current score times this factor, in (0, 1]; 1 = unchanged: far objects without
+  // depth have no projection and are "new" in every frame, and a lower factor ranked them
+  // below false positives.
   double new_region_score_factor = 1.0;
   // A new region (as above) scoring below this after the factor is dropped (reported
   // as kDropped with its current_index), in [0, 1]; 0 = never dropped. 0.35 (an
   // extension, temporal consistency): a region with neither support from the previous
-  // frame nor confidence is most likely a false positive (fcis-like's are random per
-  // frame and score <= 0.6; its true detections score ~ their IoU); their pixels cost
-  // mIoU. Measured with kAlways (80 frames, mean over seeds 1-3, refined - raw mIoU,
-  // city p1 / p2 / office p1 / p2): 0 +1.9 / +3.4 / +3.2 / +4.6, 0.2 +5.0 / +6.4 /
-  // +5.4 / +6.8, 0.35 +7.4 / +10.0 / +7.7 / +8.7; mAP unchanged (+-0.1). The first
-  // frame and clean input (scores 1) are unaffected.
+  // frame nor confidence is most likely a false positive, whose pixels cost mIoU. The
+  // first frame and clean input (scores 1) are unaffected.
   double min_new_region_score = 0.35;
 
   // False (and the reason in *error when given) for any value out of its range.
