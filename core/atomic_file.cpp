@@ -3,9 +3,14 @@
 #include <fcntl.h>  // AT_FDCWD
 #include <unistd.h>
 
+#include <signal.h>
+
+#include <cctype>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <limits>
+#include <regex>
 
 #include <opencv2/imgcodecs.hpp>
 
@@ -57,21 +62,53 @@ void WriteImageAtomically(const std::filesystem::path& path, const cv::Mat& imag
   WriteBytesAtomically(path, buffer.data(), buffer.size());
 }
 
-StagingDirectory::StagingDirectory(std::filesystem::path target, bool overwrite)
-    : target_(std::move(target)), overwrite_(overwrite) {
+namespace {
+
+std::string PidAndHost() { return std::to_string(static_cast<long>(::getpid())) + "@" + StagingHostName(); }
+
+}  // namespace
+
+StagingDirectory::StagingDirectory(std::filesystem::path target, bool overwrite, OwnOutputCheck is_own_output,
+                                   std::string kind)
+    : target_(std::move(target)),
+      overwrite_(overwrite),
+      is_own_output_(std::move(is_own_output)),
+      kind_(std::move(kind)) {
   namespace fs = std::filesystem;
   if (target_.filename().empty()) target_ = target_.parent_path();
-  if (fs::exists(target_) && !overwrite) {
-    throw FileError(target_, "already exists (use --force to replace it)");
+  // First, so that an output put back from a killed commit is judged as any other.
+  ClearAbandonedStaging(target_);
+  std::error_code error;
+  if (fs::exists(target_, error)) {
+    if (!overwrite && fs::is_directory(target_, error)) {
+      throw FileError(target_, "already exists (use --force to replace it)");
+    }
+    CheckReplaceable();
   }
   const fs::path parent = target_.has_parent_path() ? target_.parent_path() : fs::path(".");
-  std::error_code error;
   fs::create_directories(parent, error);
   if (error) throw FileError(parent, "cannot create output directory: " + error.message());
-  staging_ = parent / ("." + target_.filename().string() + ".partial-" + std::to_string(::getpid()));
+  staging_ = parent / ("." + target_.filename().string() + ".partial-" + PidAndHost());
   fs::remove_all(staging_, error);
   if (!fs::create_directory(staging_, error) || error) {
     throw FileError(target_, "cannot write here: " + (error ? error.message() : std::string("unknown reason")));
+  }
+}
+
+void StagingDirectory::CheckReplaceable() const {
+  namespace fs = std::filesystem;
+  std::error_code error;
+  if (!fs::exists(target_, error)) return;
+  if (!fs::is_directory(target_, error)) {
+    throw FileError(target_, "is a file, not a folder (a " + kind_ + " is a folder); give another path");
+  }
+  if (fs::is_empty(target_, error) && !error) return;
+  const std::string foreign =
+      is_own_output_ ? is_own_output_(target_) : std::string("nothing tells it from a folder of other files");
+  if (!foreign.empty()) {
+    throw FileError(target_, "holds what segslam did not write (" + foreign + "); only a " + kind_ +
+                                 " that segslam wrote is replaced: choose another folder, or remove this one "
+                                 "yourself");
   }
 }
 
@@ -110,10 +147,13 @@ void StagingDirectory::Commit() {
     committed_ = true;
     return;
   }
+  // What is there now is checked again: the constructor's check is long past.
+  CheckReplaceable();
   std::error_code error;
   fs::path old;
   if (fs::exists(target_)) {
-    old = target_.parent_path() / ("." + target_.filename().string() + ".old-" + std::to_string(::getpid()));
+    const fs::path parent = target_.has_parent_path() ? target_.parent_path() : fs::path(".");
+    old = parent / ("." + target_.filename().string() + ".old-" + PidAndHost());
     fs::rename(target_, old, error);
     if (error) throw FileError(target_, "cannot replace: " + error.message());
   }
@@ -126,6 +166,62 @@ void StagingDirectory::Commit() {
   }
   committed_ = true;
   if (!old.empty()) fs::remove_all(old, error);
+}
+
+std::optional<StagingLeftover> ParseStagingLeftover(const std::filesystem::path& path) {
+  // The target's name is greedy: a name that itself ends in ".partial-N" still parses.
+  static const std::regex kLeftover(R"(\.(.+)\.(partial|old)-([0-9]{1,10})(@([A-Za-z0-9._-]+))?)");
+  const std::string name = path.filename().string();
+  std::smatch match;
+  if (!std::regex_match(name, match, kLeftover)) return std::nullopt;
+  StagingLeftover leftover;
+  leftover.path = path;
+  leftover.target_name = match[1].str();
+  leftover.replaced_output = match[2].str() == "old";
+  leftover.pid = std::stoll(match[3].str());
+  leftover.host = match[5].str();
+  return leftover;
+}
+
+bool IsAbandoned(const StagingLeftover& leftover) {
+  if (!leftover.host.empty() && leftover.host != StagingHostName()) return false;
+  // Signal 0 only asks whether the process exists; a number no pid can be names none.
+  if (leftover.pid <= 0 || leftover.pid > std::numeric_limits<pid_t>::max()) return true;
+  return ::kill(static_cast<pid_t>(leftover.pid), 0) != 0 && errno == ESRCH;
+}
+
+std::string StagingHostName() {
+  char buffer[256] = {};
+  if (::gethostname(buffer, sizeof(buffer) - 1) != 0 || buffer[0] == '\0') return "unknown-host";
+  std::string host(buffer);
+  for (char& c : host) {
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '.' && c != '-' && c != '_') c = '_';
+  }
+  return host;
+}
+
+std::vector<std::filesystem::path> ClearAbandonedStaging(const std::filesystem::path& target) {
+  namespace fs = std::filesystem;
+  std::vector<fs::path> cleared;
+  const fs::path parent = target.has_parent_path() ? target.parent_path() : fs::path(".");
+  std::error_code error;
+  std::vector<StagingLeftover> abandoned;
+  for (fs::directory_iterator it(parent, error), end; !error && it != end; it.increment(error)) {
+    const std::optional<StagingLeftover> leftover = ParseStagingLeftover(it->path());
+    if (leftover && leftover->target_name == target.filename().string() && IsAbandoned(*leftover)) {
+      abandoned.push_back(*leftover);
+    }
+  }
+  for (const StagingLeftover& leftover : abandoned) {
+    std::error_code step_error;
+    if (leftover.replaced_output && !fs::exists(target, step_error)) {
+      fs::rename(leftover.path, target, step_error);
+    } else {
+      fs::remove_all(leftover.path, step_error);
+    }
+    if (!step_error) cleared.push_back(leftover.path);
+  }
+  return cleared;
 }
 
 }  // namespace segslam

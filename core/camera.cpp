@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include <fmt/format.h>
+
 namespace segslam {
 
 PinholeCamera PinholeCamera::FromVerticalFov(int width, int height, double fovy_deg) {
@@ -44,18 +46,38 @@ bool PinholeCamera::IsValid(std::string* error) const {
     if (error != nullptr) *error = what;
     return false;
   };
-  if (width <= 0 || height <= 0) {
-    return fail("image size must be positive, got " + std::to_string(width) + "x" +
-                std::to_string(height));
+  if (width <= 0 || height <= 0 || width > kMaxSidePixels || height > kMaxSidePixels) {
+    return fail(fmt::format("image size must be 1 to {} pixels a side, got {}x{}", kMaxSidePixels, width, height));
   }
   if (!std::isfinite(fx) || !std::isfinite(fy) || fx <= 0 || fy <= 0) {
-    return fail("focal lengths fx, fy must be finite and positive, got " +
-                std::to_string(fx) + ", " + std::to_string(fy));
+    return fail(fmt::format("focal lengths fx, fy must be finite and positive, got {:g}, {:g}", fx, fy));
   }
+  // Each axis's field of view, and the focal lengths that bound it.
+  const auto check_focal = [&](const char* name, double focal, int size, const char* axis) {
+    const double fov_deg = 2 * std::atan(0.5 * size / focal) * 180 / M_PI;
+    if (fov_deg >= kMinFieldOfViewDeg && fov_deg <= kMaxFieldOfViewDeg) return true;
+    const auto focal_for = [&](double fov) { return 0.5 * size / std::tan(0.5 * fov * M_PI / 180); };
+    return fail(fmt::format("{} {:g} px gives a {} field of view of {:.4g} deg across {} px; it must be {} to {} "
+                            "deg ({} from {:.4g} to {:.4g} px)",
+                            name, focal, axis, fov_deg, size, kMinFieldOfViewDeg, kMaxFieldOfViewDeg, name,
+                            focal_for(kMaxFieldOfViewDeg), focal_for(kMinFieldOfViewDeg)));
+  };
+  if (!check_focal("fx", fx, width, "horizontal") || !check_focal("fy", fy, height, "vertical")) return false;
+  if (fx > kMaxPixelAspect * fy || fy > kMaxPixelAspect * fx) {
+    return fail(fmt::format("fx {:g} and fy {:g} differ more than {:g} times (pixels that much wider than high, or "
+                            "the reverse)",
+                            fx, fy, kMaxPixelAspect));
+  }
+  // Inside the image area, the pixel centres' span widened by half a pixel.
+  const auto check_centre = [&](const char* name, double centre, int size) {
+    if (centre >= -0.5 && centre <= size - 0.5) return true;
+    return fail(fmt::format("principal point {} {:g} lies outside the image (-0.5 to {:g} for {} px)", name, centre,
+                            size - 0.5, size));
+  };
   if (!std::isfinite(cx) || !std::isfinite(cy)) {
     return fail("principal point cx, cy must be finite");
   }
-  return true;
+  return check_centre("cx", cx, width) && check_centre("cy", cy, height);
 }
 
 }  // namespace segslam

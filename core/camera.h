@@ -41,8 +41,20 @@ struct PinholeCamera {
   Eigen::Matrix3d K() const;
   cv::Matx33d KCv() const;
 
-  // False (and a reason in *error when given) for non-positive size or focal lengths,
-  // or non-finite values.
+  // Limits of a camera segslam accepts, wherever one comes from (a scenario, camera.yaml,
+  // --camera, a map file): beyond them a run "localizes" every frame with absurd poses.
+  static constexpr int kMaxSidePixels = 16384;
+  // The field of view along each axis, 2 atan(size / 2 f): a pinhole image wider than this
+  // is nearly all periphery, a narrower one a telescope's.
+  static constexpr double kMinFieldOfViewDeg = 1;
+  static constexpr double kMaxFieldOfViewDeg = 170;
+  // fx / fy: pixels at most twice as wide as high, or the reverse.
+  static constexpr double kMaxPixelAspect = 2;
+
+  // False (and a reason in *error when given) for a size outside 1..kMaxSidePixels,
+  // non-finite values, a focal length whose field of view lies outside
+  // [kMinFieldOfViewDeg, kMaxFieldOfViewDeg] or whose fx / fy exceeds kMaxPixelAspect either
+  // way, or a principal point outside the image area [-0.5, W-0.5] x [-0.5, H-0.5].
   bool IsValid(std::string* error) const;
 };
 

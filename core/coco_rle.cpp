@@ -32,7 +32,7 @@ std::vector<std::uint32_t> DecodeCocoRleString(std::string_view text, const std:
       const int group = static_cast<unsigned char>(text[position]) - 48;
       if (group < 0 || group > 63) {
         throw Error(fmt::format("{}: compressed RLE counts hold '{}' at position {}, outside '0'..'o'", origin,
-                                text[position], position));
+                                PrintableText(text.substr(position, 1)), position));
       }
       if (groups == kMaxGroupsPerCount) {
         throw Error(fmt::format("{}: compressed RLE count at position {} is longer than {} characters", origin,

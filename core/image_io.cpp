@@ -1,8 +1,12 @@
 #include "core/image_io.h"
 
 #include <cctype>
+#include <cerrno>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <memory>
 #include <new>
 #include <string>
 #include <vector>
@@ -10,23 +14,62 @@
 #include <png.h>
 #include <zlib.h>
 
+#include <fmt/format.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/input_file.h"
 
 namespace segslam {
 namespace {
 
-// Reads any image unchanged (keeping 16-bit depth and channel count); throws if missing
-// or not decodable.
-cv::Mat ReadUnchanged(const std::filesystem::path& path) {
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) {
-    throw FileError(path, std::filesystem::exists(path, ec) ? "not a regular file"
-                                                            : "image file does not exist");
+// What a reader takes: checked from a PNG's header before decoding, and on the decoded
+// image (other formats, and what a header cannot say).
+struct ImageRequirements {
+  const char* noun;                 // "image" or "mask", for "<noun> is WxH"
+  const char* expected_size_owner;  // "camera expects": "<noun> is WxH, camera expects wxh"
+  bool sixteen_bit_grey = false;    // depth and masks; colour is 8-bit
+  const char* type_text = "";       // "depth image must be 16-bit single-channel (CV_16UC1)"
+  std::optional<cv::Size> expected_size;
+};
+
+void CheckImageSize(const std::filesystem::path& path, long long width, long long height,
+                    const ImageRequirements& requirements) {
+  if (requirements.expected_size.has_value()) {
+    const cv::Size& expected = *requirements.expected_size;
+    if (width != expected.width || height != expected.height) {
+      throw FileError(path, fmt::format("{} is {}x{}, {} {}x{}", requirements.noun, width, height,
+                                        requirements.expected_size_owner, expected.width, expected.height));
+    }
   }
+  if (width * height > kMaxImagePixels) {
+    throw FileError(path, fmt::format("{} is {}x{}, larger than any camera image segslam reads ({} pixels at most)",
+                                      requirements.noun, width, height, kMaxImagePixels));
+  }
+}
+
+// Refuses, from a PNG's header alone, what the decoder would spend time and memory on
+// only for the image to be refused afterwards.
+void CheckPngHeader(const std::filesystem::path& path, const ImageRequirements& requirements) {
+  const std::optional<PngHeader> header = ReadPngHeader(path);
+  if (!header.has_value()) return;
+  CheckImageSize(path, header->width, header->height, requirements);
+  const bool sixteen_bit_grey = header->bit_depth == 16 && header->channels == 1;
+  if (requirements.sixteen_bit_grey ? !sixteen_bit_grey : header->bit_depth > 8) {
+    // Named as the decoder would give it (a palette's one channel aside).
+    const int type = CV_MAKETYPE(header->bit_depth == 16 ? CV_16U : CV_8U, header->channels);
+    throw FileError(path, fmt::format("{}, found {} (a {}-bit PNG)", requirements.type_text, CvTypeName(type),
+                                      header->bit_depth));
+  }
+}
+
+// Reads any image unchanged (keeping 16-bit depth and channel count) once its PNG header
+// passed `requirements`; throws if missing or not decodable, or of another size.
+cv::Mat ReadUnchanged(const std::filesystem::path& path, const ImageRequirements& requirements) {
+  CheckInputFile(path);
+  CheckPngHeader(path, requirements);
   cv::Mat image;
   try {
     image = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
@@ -34,8 +77,11 @@ cv::Mat ReadUnchanged(const std::filesystem::path& path) {
     throw FileError(path, std::string("cannot decode image: ") + e.what());
   }
   if (image.empty()) throw FileError(path, "cannot decode image (corrupt or unsupported)");
+  CheckImageSize(path, image.cols, image.rows, requirements);
   return image;
 }
+
+void ClosePngFile(std::FILE* file) { std::fclose(file); }
 
 // Row filters per kind of image, measured on rendered city frames (see image_io.h).
 constexpr int kDepthPngFilter = PNG_FILTER_SUB;
@@ -156,8 +202,40 @@ std::string CvTypeName(int type) {
          std::to_string(CV_MAT_CN(type));
 }
 
-cv::Mat ReadColorImage(const std::filesystem::path& path) {
-  cv::Mat image = ReadUnchanged(path);
+std::optional<PngHeader> ReadPngHeader(const std::filesystem::path& path) {
+  CheckInputFile(path);
+  const std::unique_ptr<std::FILE, decltype(&ClosePngFile)> file(std::fopen(path.c_str(), "rb"), ClosePngFile);
+  if (file == nullptr) throw FileError(path, std::string("cannot open file: ") + std::strerror(errno));
+  constexpr std::size_t kSignatureBytes = 8;
+  png_byte signature[kSignatureBytes] = {};
+  if (std::fread(signature, 1, kSignatureBytes, file.get()) != kSignatureBytes ||
+      png_sig_cmp(signature, 0, kSignatureBytes) != 0) {
+    return std::nullopt;
+  }
+  // libpng reads the chunks before the first IDAT (the header and a few small ones) and
+  // reports errors by longjmp: nothing in this frame needs destroying beyond libpng's own.
+  std::string error = "libpng could not start";
+  png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &error, OnPngError, IgnorePngWarning);
+  png_infop info = png != nullptr ? png_create_info_struct(png) : nullptr;
+  if (png == nullptr || info == nullptr || setjmp(png_jmpbuf(png))) {
+    png_destroy_read_struct(&png, &info, nullptr);
+    throw FileError(path, "damaged PNG header: " + error);
+  }
+  png_init_io(png, file.get());
+  png_set_sig_bytes(png, kSignatureBytes);
+  png_read_info(png, info);
+  PngHeader header;
+  header.width = static_cast<int>(png_get_image_width(png, info));
+  header.height = static_cast<int>(png_get_image_height(png, info));
+  header.bit_depth = png_get_bit_depth(png, info);
+  header.channels = png_get_channels(png, info);
+  png_destroy_read_struct(&png, &info, nullptr);
+  return header;
+}
+
+cv::Mat ReadColorImage(const std::filesystem::path& path, const std::optional<cv::Size>& expected_size) {
+  cv::Mat image = ReadUnchanged(path, {"image", "camera expects", false,
+                                       "colour image must be 8-bit", expected_size});
   if (image.depth() != CV_8U) {
     throw FileError(path, "colour image must be 8-bit, found " + CvTypeName(image.type()));
   }
@@ -180,11 +258,13 @@ cv::Mat ReadColorImage(const std::filesystem::path& path) {
   }
 }
 
-cv::Mat ReadDepthImage(const std::filesystem::path& path, double depth_factor) {
+cv::Mat ReadDepthImage(const std::filesystem::path& path, double depth_factor,
+                       const std::optional<cv::Size>& expected_size) {
   if (!(depth_factor > 0) || !std::isfinite(depth_factor)) {
     throw FileError(path, "depth factor must be positive, got " + std::to_string(depth_factor));
   }
-  const cv::Mat raw = ReadUnchanged(path);
+  const cv::Mat raw = ReadUnchanged(path, {"image", "camera expects", true,
+                                           "depth image must be 16-bit single-channel (CV_16UC1)", expected_size});
   if (raw.type() != CV_16UC1) {
     throw FileError(path, "depth image must be 16-bit single-channel (CV_16UC1), found " +
                               CvTypeName(raw.type()));
@@ -221,8 +301,9 @@ std::vector<unsigned char> EncodeDepthPng(const cv::Mat& depth_m, double depth_f
   return EncodePngOrThrow(raw, kDepthPngFilter, Z_DEFAULT_STRATEGY, "depth");
 }
 
-cv::Mat ReadInstanceMask(const std::filesystem::path& path) {
-  cv::Mat mask = ReadUnchanged(path);
+cv::Mat ReadInstanceMask(const std::filesystem::path& path, const std::optional<cv::Size>& expected_size) {
+  cv::Mat mask = ReadUnchanged(path, {"mask", "the sequence's images are", true,
+                                      "instance mask must be 16-bit single-channel (CV_16UC1)", expected_size});
   if (mask.type() != CV_16UC1) {
     throw FileError(path, "instance mask must be 16-bit single-channel (CV_16UC1), found " +
                               CvTypeName(mask.type()));

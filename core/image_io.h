@@ -8,6 +8,7 @@
 #pragma once
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -15,13 +16,37 @@
 
 namespace segslam {
 
+// What a PNG file's header (its IHDR chunk) says, read without decoding a pixel.
+struct PngHeader {
+  int width = 0, height = 0;
+  int bit_depth = 0;  // bits per sample: 1, 2, 4, 8 or 16
+  int channels = 0;   // 1 grey, 2 grey + alpha, 3 RGB or a palette, 4 RGBA
+};
+
+// The header of a PNG file; nullopt when the file does not start with PNG's signature
+// (another format, which OpenCV decodes unchecked). Throws segslam::Error naming the file
+// when it cannot be opened or its header is damaged.
+std::optional<PngHeader> ReadPngHeader(const std::filesystem::path& path);
+
+// The largest image any reader below decodes, in pixels (8192 x 8192): the readers check
+// a PNG's header first, so a small file that claims a huge image (a 20000 x 20000 16-bit
+// PNG compresses to under 1 MB and decodes to 800 MB) is refused before it is decoded.
+constexpr long long kMaxImagePixels = 1LL << 26;
+
+// Each reader below refuses, from a PNG's header and before decoding it, an image over
+// kMaxImagePixels, one of another size than `expected_size` where that is given (naming
+// both sizes), and one whose bit depth or channels its kind cannot take; files of other
+// formats are checked the same way once decoded.
+
 // CV_8UC3 BGR. 8-bit grayscale is converted to BGR, 8-bit BGRA drops alpha. Throws if
 // the file is missing or not decodable, or if it is not 8-bit with 1, 3 or 4 channels.
-cv::Mat ReadColorImage(const std::filesystem::path& path);
+cv::Mat ReadColorImage(const std::filesystem::path& path,
+                       const std::optional<cv::Size>& expected_size = std::nullopt);
 
 // CV_32F metres: stored value / depth_factor, stored 0 stays 0 (no depth). Requires a
 // 16-bit single-channel image (else throws, naming the type found) and depth_factor > 0.
-cv::Mat ReadDepthImage(const std::filesystem::path& path, double depth_factor);
+cv::Mat ReadDepthImage(const std::filesystem::path& path, double depth_factor,
+                       const std::optional<cv::Size>& expected_size = std::nullopt);
 
 // The PNG writers below encode with libpng directly: zlib level 1 and one row filter
 // chosen per kind of image. OpenCV 4.6's imencode cannot choose the filter, and libpng
@@ -53,7 +78,8 @@ void WriteDepthImage(const std::filesystem::path& path, const cv::Mat& depth_m,
 std::vector<unsigned char> EncodeDepthPng(const cv::Mat& depth_m, double depth_factor);
 
 // CV_16U instance ids. Throws unless the file is a 16-bit single-channel image.
-cv::Mat ReadInstanceMask(const std::filesystem::path& path);
+cv::Mat ReadInstanceMask(const std::filesystem::path& path,
+                         const std::optional<cv::Size>& expected_size = std::nullopt);
 
 // Writes a CV_16U id image losslessly. Label images are long runs of one value, which
 // zlib finds without a row filter.

@@ -22,7 +22,7 @@ void InstanceTable::Add(const InstanceInfo& info) {
   }
   if (!info.category_name.empty() && info.category_name != category->name) {
     throw Error(fmt::format("instance {}: category name '{}' does not match COCO id {} ('{}')",
-                            info.id, info.category_name, info.category_id, category->name));
+                            info.id, PrintableText(info.category_name), info.category_id, category->name));
   }
   const auto it = std::lower_bound(
       instances_.begin(), instances_.end(), info.id,

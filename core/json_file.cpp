@@ -1,17 +1,12 @@
 #include "core/json_file.h"
 
 #include "core/error.h"
-
-#include <fstream>
+#include "core/input_file.h"
 
 namespace segslam {
 
 nlohmann::json ReadJsonFile(const std::filesystem::path& path) {
-  std::ifstream file(path);
-  if (!file) {
-    throw FileError(path, std::filesystem::exists(path) ? "cannot open file"
-                                                        : "file does not exist");
-  }
+  std::ifstream file = OpenInputFile(path);
   try {
     return nlohmann::json::parse(file);
   } catch (const nlohmann::json::exception& e) {

@@ -7,8 +7,9 @@
 
 namespace segslam {
 
-// Parses `path`; throws segslam::Error "<path>: file does not exist" / "cannot open
-// file" / "malformed JSON: ...".
+// Parses `path`; throws segslam::Error with OpenInputFile's messages (core/input_file.h:
+// "<path>: file does not exist", "is a directory, expected a file", ...) or "<path>:
+// malformed JSON: ...".
 nlohmann::json ReadJsonFile(const std::filesystem::path& path);
 
 }  // namespace segslam

@@ -61,6 +61,23 @@ double CornerRadius(const PinholeCamera& camera) {
                     std::max(camera.cy, camera.height - 1 - camera.cy) / camera.fy);
 }
 
+bool LensCoversImage(const LensDistortion& distortion, const PinholeCamera& camera, std::string* error) {
+  if (distortion.IsZero()) return true;
+  const double corner = CornerRadius(camera);
+  // Searched past the corners: a barrel lens's stored corners see points beyond them.
+  const double growing = distortion.GrowingRadius(4 * corner);
+  if (growing < corner || distortion.DistortRadius(growing) < corner) {
+    if (error != nullptr) {
+      *error = fmt::format("the lens (k1 {:g}, k2 {:g}, k3 {:g}) folds the image: its radial distortion stops growing "
+                           "at normalised radius {:.4g}, and the image's corners lie at {:.4g} (a polynomial fitted "
+                           "to a narrower field of view?)",
+                           distortion.k1, distortion.k2, distortion.k3, growing, corner);
+    }
+    return false;
+  }
+  return true;
+}
+
 ImageUndistorter::ImageUndistorter(const PinholeCamera& camera, const LensDistortion& distortion)
     : camera_(camera) {
   std::string error;

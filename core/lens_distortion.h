@@ -48,6 +48,14 @@ struct LensDistortion {
 // how far out a lens model must hold for this camera.
 double CornerRadius(const PinholeCamera& camera);
 
+// Whether `distortion` holds over the whole of `camera`'s image: its radial distortion
+// keeps growing out to the image's corners in the pinhole image, and until it reaches them
+// in the stored one. A generated dataset is bent through the lens and a run takes the bend
+// out again; beyond where the polynomial stops growing (a fit to a narrower field) the
+// lens folds the image onto itself. False with the reason in *error (when given); true for
+// no distortion. `camera` must be valid.
+bool LensCoversImage(const LensDistortion& distortion, const PinholeCamera& camera, std::string* error);
+
 // Resamples whole images between a distorted camera's stored geometry and the pinhole
 // geometry with the same intrinsics. Each direction's pixel map is built once (a few tens
 // of milliseconds at 640x480); a call then costs one cv::remap. Immutable after

@@ -2,6 +2,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/input_file.h"
 
 #include <openssl/evp.h>
 
@@ -25,8 +26,7 @@ struct EvpContextDeleter {
 }  // namespace
 
 std::string Sha256OfFile(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw FileError(file, "cannot open for reading");
+  std::ifstream in = OpenInputFile(file, std::ios::in | std::ios::binary);
   std::unique_ptr<EVP_MD_CTX, EvpContextDeleter> context(EVP_MD_CTX_new());
   if (!context || EVP_DigestInit_ex(context.get(), EVP_sha256(), nullptr) != 1) {
     throw FileError(file, "cannot initialise SHA-256");
@@ -113,6 +113,40 @@ std::vector<std::string> VerifyManifest(const std::filesystem::path& dir) {
   }
   for (const auto& [path, entry] : listed) {
     if (!seen.count(path)) problems.push_back(path + ": listed in the manifest but missing");
+  }
+  return problems;
+}
+
+std::vector<std::string> CheckListedFiles(const std::filesystem::path& dir, bool hashes) {
+  const std::filesystem::path manifest_path = dir / kManifestName;
+  std::ifstream in(manifest_path);
+  if (!in) return {manifest_path.string() + ": missing"};
+  const nlohmann::json manifest = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
+  const auto files = manifest.is_object() ? manifest.find("files") : manifest.end();
+  if (!manifest.is_object() || files == manifest.end() || !files->is_array()) {
+    return {manifest_path.string() + ": not a manifest (expected {\"files\": [{\"path\", \"size\", \"sha256\"}, ...]})"};
+  }
+  std::vector<std::string> problems;
+  for (const nlohmann::json& file : *files) {
+    const auto text = [&](const char* key) {
+      return file.is_object() && file.contains(key) && file.at(key).is_string() ? file.at(key).get<std::string>()
+                                                                                 : std::string();
+    };
+    const std::string path = text("path");
+    if (path.empty() || !file.contains("size") || !file.at("size").is_number_unsigned()) {
+      problems.push_back(manifest_path.string() + ": an entry without a path or size");
+      continue;
+    }
+    std::error_code error;
+    const std::uintmax_t size = std::filesystem::file_size(dir / path, error);
+    if (error) {
+      problems.push_back(path + ": missing");
+    } else if (size != file.at("size").get<std::uintmax_t>()) {
+      problems.push_back(path + ": " + std::to_string(size) + " bytes, the manifest lists " +
+                         std::to_string(file.at("size").get<std::uintmax_t>()));
+    } else if (hashes && Sha256OfFile(dir / path) != text("sha256")) {
+      problems.push_back(path + ": its SHA-256 differs from the manifest's");
+    }
   }
   return problems;
 }

@@ -32,4 +32,11 @@ void WriteManifest(const std::filesystem::path& dir, const nlohmann::json& extra
 // (missing file, size or checksum mismatch, unlisted file); empty means intact.
 std::vector<std::string> VerifyManifest(const std::filesystem::path& dir);
 
+// Checks the files that dir/manifest.json lists: each present with its listed size and,
+// with `hashes`, its SHA-256. Files it does not list are not looked at (a run's output
+// may lie inside a dataset). Returns the problems, one per file, e.g.
+// "pass1/depth/0.033333.png: missing"; empty means intact. Sizes cost a stat per file;
+// hashes read every byte.
+std::vector<std::string> CheckListedFiles(const std::filesystem::path& dir, bool hashes);
+
 }  // namespace segslam

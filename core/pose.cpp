@@ -10,6 +10,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/input_file.h"
 
 namespace segslam {
 namespace {
@@ -70,7 +71,7 @@ StampedPose ParseTumPoseLine(const std::string& line, const std::string& origin_
   for (int i = 0; i < 8; ++i) {
     if (!ParseTumNumber(tokens[i], &v[i])) {
       throw Error(fmt::format("{}: field {} ({}) is not a finite number: '{}'",
-                              origin_for_errors, i + 1, kNames[i], tokens[i]));
+                              origin_for_errors, i + 1, kNames[i], PrintableText(tokens[i])));
     }
   }
   Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);
@@ -89,11 +90,7 @@ StampedPose ParseTumPoseLine(const std::string& line, const std::string& origin_
 }
 
 std::vector<StampedPose> ReadTumTrajectory(const std::filesystem::path& path) {
-  std::ifstream file(path);
-  if (!file) {
-    throw FileError(path, std::filesystem::exists(path) ? "cannot open file"
-                                                        : "file does not exist");
-  }
+  std::ifstream file = OpenInputFile(path);
   std::vector<StampedPose> poses;
   std::string line;
   for (int line_number = 1; std::getline(file, line); ++line_number) {

@@ -14,8 +14,10 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/input_file.h"
 #include "core/image_io.h"
 #include "core/manifest.h"
+#include "core/yaml_file.h"
 
 namespace segslam {
 namespace {
@@ -23,11 +25,7 @@ namespace {
 // Calls `on_line(tokens, origin)` for each non-comment, non-blank line of a text file.
 template <typename OnLine>
 void ForEachDataLine(const std::filesystem::path& path, OnLine on_line) {
-  std::ifstream file(path);
-  if (!file) {
-    throw FileError(path, std::filesystem::exists(path) ? "cannot open file"
-                                                        : "file does not exist");
-  }
+  std::ifstream file = OpenInputFile(path);
   std::string line;
   for (int line_number = 1; std::getline(file, line); ++line_number) {
     const size_t first = line.find_first_not_of(" \t\r");
@@ -40,7 +38,7 @@ void ForEachDataLine(const std::filesystem::path& path, OnLine on_line) {
 double ParseStamp(const std::string& token, const std::string& origin) {
   double stamp = 0;
   if (!ParseTumNumber(token, &stamp)) {
-    throw Error(fmt::format("{}: timestamp '{}' is not a finite number", origin, token));
+    throw Error(fmt::format("{}: timestamp '{}' is not a finite number", origin, PrintableText(token)));
   }
   return stamp;
 }
@@ -56,25 +54,24 @@ bool SequenceCamera::IsValid(std::string* error) const {
     if (error != nullptr) *error = "depth_factor must be finite and positive";
     return false;
   }
-  return distortion.IsValid(error);
+  // The check a scenario's camera passes too (scenes/scenario.cpp), so that a camera
+  // generate refuses cannot be given to run or eval.
+  return distortion.IsValid(error) && LensCoversImage(distortion, intrinsics, error);
 }
 
 namespace {
 
 SequenceCamera CameraFromYaml(const YAML::Node& root, const std::filesystem::path& path) {
   if (!root.IsMap()) throw FileError(path, "expected a map of camera keys");
-  std::set<std::string> seen;
   for (const auto& item : root) {
     const int line = item.first.Mark().line + 1;
     if (!item.first.IsScalar()) throw FileError(path, fmt::format("line {}: a key must be a plain name", line));
     const std::string& key = item.first.Scalar();
     if (std::find(std::begin(kCameraKeys), std::end(kCameraKeys), key) == std::end(kCameraKeys)) {
-      throw FileError(path, "unknown key '" + key +
+      throw FileError(path, "unknown key '" + PrintableText(key) +
                                 "' (expected width, height, fx, fy, cx, cy, depth_factor, and "
                                 "optionally k1, k2, p1, p2, k3)");
     }
-    // yaml-cpp keeps both, and root[key] would quietly take the first.
-    if (!seen.insert(key).second) throw FileError(path, fmt::format("line {}: duplicate key '{}'", line, key));
   }
   auto get_double = [&](const char* key) {
     const YAML::Node node = root[key];
@@ -111,11 +108,12 @@ SequenceCamera CameraFromYaml(const YAML::Node& root, const std::filesystem::pat
 }  // namespace
 
 SequenceCamera ReadCameraYaml(const std::filesystem::path& path) {
-  if (!std::filesystem::exists(path)) throw FileError(path, "file does not exist");
+  // LoadYamlFile refuses a missing file, a folder, bad syntax and repeated keys.
+  const YAML::Node root = LoadYamlFile(path);
   // Around the whole read: yaml-cpp throws from conversions too, not only from parsing,
   // and its exceptions would reach the CLI as an internal error without the file's name.
   try {
-    return CameraFromYaml(YAML::LoadFile(path.string()), path);
+    return CameraFromYaml(root, path);
   } catch (const YAML::Exception& e) {
     throw FileError(path, std::string("malformed YAML: ") + e.what());
   }
@@ -354,16 +352,10 @@ RgbdFrame TumSequence::LoadFrame(size_t i) const {
   RgbdFrame frame;
   frame.index = static_cast<int>(i);
   frame.stamp_s = entry.rgb_stamp_s;
-  frame.color_bgr = ReadColorImage(dir_ / entry.rgb_file);
-  frame.depth_m = ReadDepthImage(dir_ / entry.depth_file, camera_.depth_factor);
-  const int w = camera_.intrinsics.width, h = camera_.intrinsics.height;
-  for (const auto& [mat, file] : {std::pair{&frame.color_bgr, &entry.rgb_file},
-                                  std::pair{&frame.depth_m, &entry.depth_file}}) {
-    if (mat->cols != w || mat->rows != h) {
-      throw FileError(dir_ / *file, fmt::format("image is {}x{}, camera expects {}x{}",
-                                                mat->cols, mat->rows, w, h));
-    }
-  }
+  // The readers refuse another size from a PNG's header, before decoding it.
+  const cv::Size size(camera_.intrinsics.width, camera_.intrinsics.height);
+  frame.color_bgr = ReadColorImage(dir_ / entry.rgb_file, size);
+  frame.depth_m = ReadDepthImage(dir_ / entry.depth_file, camera_.depth_factor, size);
   if (undistorter_ != nullptr) {
     frame.color_bgr = undistorter_->UndistortColour(frame.color_bgr);
     frame.depth_m = undistorter_->UndistortDepth(frame.depth_m);
@@ -372,12 +364,7 @@ RgbdFrame TumSequence::LoadFrame(size_t i) const {
 }
 
 cv::Mat TumSequence::LoadInstanceMask(const std::filesystem::path& png) const {
-  cv::Mat ids = ReadInstanceMask(png);
-  const int w = camera_.intrinsics.width, h = camera_.intrinsics.height;
-  if (ids.cols != w || ids.rows != h) {
-    throw FileError(png, fmt::format("mask is {}x{}, the sequence's images are {}x{}", ids.cols, ids.rows, w, h));
-  }
-  return InstanceMaskAsLoaded(ids);
+  return InstanceMaskAsLoaded(ReadInstanceMask(png, cv::Size(camera_.intrinsics.width, camera_.intrinsics.height)));
 }
 
 cv::Mat TumSequence::InstanceMaskAsLoaded(const cv::Mat& stored_ids) const {

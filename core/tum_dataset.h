@@ -33,13 +33,16 @@ struct SequenceCamera {
   // core/lens_distortion.h). Zero for generated datasets and TUM freiburg3.
   LensDistortion distortion;
 
+  // The one check of every camera segslam reads or generates: the intrinsics
+  // (PinholeCamera::IsValid), the depth factor, and a lens that covers the whole image
+  // (LensCoversImage).
   bool IsValid(std::string* error) const;
 };
 
 // camera.yaml with the keys width, height, fx, fy, cx, cy, depth_factor, and optionally
 // the distortion coefficients k1, k2, p1, p2, k3 (OpenCV's, TUM's d0..d4; absent: 0).
 // Throws naming the file and key on a missing or unknown key, a wrong type, malformed
-// YAML or invalid values (see PinholeCamera::IsValid).
+// YAML, a repeated key, or invalid values (see SequenceCamera::IsValid).
 SequenceCamera ReadCameraYaml(const std::filesystem::path& path);
 // Writes camera.yaml atomically; numbers are written with round-trip precision, the
 // distortion coefficients only when there is distortion.

@@ -8,6 +8,7 @@
 #include "core/tum_dataset.h"
 #include "harness/aliasing.h"
 #include "harness/aliasing_report.h"
+#include "harness/cli_numbers.h"
 #include "harness/commands.h"
 #include "harness/interrupt.h"
 #include "harness/progress_bar.h"
@@ -103,32 +104,33 @@ void AddBenchAliasingCommand(CLI::App& bench, std::function<int()>* action) {
                                                 "groundtruth.txt")
       ->required();
   command->add_option("--spacing", args->spacing_m, "Sample a frame every this many metres of ground-truth travel")
-      ->check(CLI::PositiveNumber)
+      ->check(NumberIn(0, 1e6, /*min_excluded=*/true))
       ->capture_default_str();
   command->add_option("--turn", args->turn_deg, "... or every this many degrees of turn")
-      ->check(CLI::PositiveNumber)
+      ->check(NumberIn(0, 360, /*min_excluded=*/true))
       ->capture_default_str();
   command->add_option("--every", args->every_frames, "... or every this many frames (0 = never)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(WholeNumberIn(0, kMaxFrames, "0 = never"))
       ->capture_default_str();
   command->add_option("--ransac-samples", args->ransac_samples,
                       "RANSAC PnP samples per pair (ORB-SLAM2's loop closing: 300; relocalization here: 2000)")
-      ->check(CLI::PositiveNumber)
+      ->check(WholeNumberIn(1, 1000000))
       ->capture_default_str();
   command->add_option("--far-apart", args->far_apart_m,
                       "Also measure pairs whose cameras are at least this many metres apart, whatever they share far "
                       "off (0: only pairs with no common view)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(NumberIn(0, 1e6))
       ->capture_default_str();
   command->add_option("--min-common-share", args->min_common_share,
                       "Pairs with a smaller share of either frame's background points seen by the other share no "
                       "view")
-      ->check(CLI::Range(1e-6, 0.999999))
+      ->check(NumberIn(1e-6, 0.999999))
       ->capture_default_str();
   command->add_flag("--background-only", args->background_only,
                     "Match features on ground-truth background only (default: every feature; a match between two "
                     "features on the same instance, the same object at both places, is not counted)");
-  command->add_option("--threads", args->threads, "Worker threads (0 = all cores)")->check(CLI::NonNegativeNumber);
+  command->add_option("--threads", args->threads, "Worker threads (0 = all cores)")
+      ->check(WholeNumberIn(0, kMaxThreads, "0 = all cores"));
   command->add_option("--json", args->json_file, "Also write the results as JSON");
   command->add_option("--pictures", args->pictures_dir,
                       "Draw each pass's worst pair with its verified matches into DIR/<pass>_worst_pair.png");

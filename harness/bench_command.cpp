@@ -6,6 +6,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/tum_dataset.h"
+#include "harness/cli_numbers.h"
 #include "harness/commands.h"
 #include "harness/machine.h"
 #include "harness/progress_bar.h"
@@ -224,7 +225,7 @@ void AddBenchCommand(CLI::App& app, std::function<int()>* action) {
       ->delimiter(',')
       ->capture_default_str();
   render->add_option("--frames", args->frames, "Frames per pass (0 = all)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(WholeNumberIn(0, kMaxFrames, "0 = all"))
       ->capture_default_str();
   render->add_option("--json", args->json_file, "Also write the results as JSON");
   render->add_option("--work-dir", args->work_dir, "Scratch directory (default: system temp)");
@@ -240,7 +241,7 @@ void AddBenchCommand(CLI::App& app, std::function<int()>* action) {
       ->check(CLI::IsMember(slam::SlamModeNames()))
       ->capture_default_str();
   slam->add_option("--frames", slam_args->frames, "Only the first N frames (0 = all)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(WholeNumberIn(0, kMaxFrames, "0 = all"));
   slam->add_option("--masks", slam_args->masks,
                    "'gt' (the sequence's masks/) or a folder of external masks (mutual: refined in the loop)")
       ->capture_default_str();

@@ -19,6 +19,16 @@ int RunCli(int argc, char** argv) {
       "relocated objects"};
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string("segslam ") + SEGSLAM_VERSION);
+  // Before the subcommands are added: each copies its parent's footer.
+  app.footer(
+      "Exit codes: 0 done; 1 an error (a bad command line, an input refused or unreadable, a failed write: one line "
+      "on stderr says what and where); 2 an expectation failed (scenario run, scenario suite); 3 an internal error "
+      "(a bug in segslam); 130 interrupted.");
+  // Usage errors as every other error: one line naming the option, exit code 1 (CLI11's
+  // own codes, 101 to 115, would say nothing the message does not).
+  app.failure_message([](const CLI::App*, const CLI::Error& e) {
+    return std::string("segslam: error: ") + e.what() + " (--help lists the options)\n";
+  });
 
   // Each subcommand registers its options and the action to run once parsing succeeded.
   std::function<int()> action;
@@ -36,20 +46,21 @@ int RunCli(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // Prints help or the version (code 0), or the failure message.
+    return app.exit(e) == 0 ? kExitSuccess : kExitError;
   }
   try {
     return action ? action() : 0;
   } catch (const Error& e) {
     std::fprintf(stderr, "segslam: error: %s\n", e.what());
-    return InterruptRequested() ? 130 : 1;
+    return InterruptRequested() ? kExitInterrupted : kExitError;
   } catch (const std::filesystem::filesystem_error& e) {
     // A folder that cannot be made or read: the user's to fix, not an internal error.
     std::fprintf(stderr, "segslam: error: %s\n", e.what());
-    return InterruptRequested() ? 130 : 1;
+    return InterruptRequested() ? kExitInterrupted : kExitError;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "segslam: internal error: %s\n", e.what());
-    return 3;
+    return kExitInternalError;
   }
 }
 

@@ -1,11 +1,11 @@
 #include "harness/dataset_cache.h"
 
 #include <algorithm>
-#include <cerrno>
-#include <limits>
+#include <chrono>
+#include <mutex>
+#include <optional>
 #include <regex>
-#include <signal.h>
-#include <sys/types.h>
+#include <set>
 #include <system_error>
 
 #include <nlohmann/json.hpp>
@@ -13,6 +13,8 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/json_file.h"
+#include "core/manifest.h"
+#include "core/output_folders.h"
 
 namespace segslam::harness {
 namespace {
@@ -23,15 +25,6 @@ fs::path RecordPath(const fs::path& dataset_dir) {
   fs::path dir = dataset_dir;
   if (dir.filename().empty()) dir = dir.parent_path();
   return dir.parent_path() / (dir.filename().string() + ".json");
-}
-
-bool HoldsSegslamManifest(const fs::path& dir) {
-  try {
-    const nlohmann::json manifest = ReadJsonFile(dir / "manifest.json");
-    return manifest.is_object() && manifest.value("format", "").rfind("segslam-manifest", 0) == 0;
-  } catch (const Error&) {
-    return false;
-  }
 }
 
 std::uintmax_t FolderBytes(const fs::path& dir) {
@@ -47,12 +40,6 @@ std::uintmax_t FolderBytes(const fs::path& dir) {
   return bytes;
 }
 
-// Signal 0 only asks whether the process exists; a number no pid can be names none.
-bool ProcessIsGone(long long pid) {
-  if (pid <= 0 || pid > std::numeric_limits<pid_t>::max()) return true;
-  return ::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH;
-}
-
 }  // namespace
 
 void RecordCachedDataset(const fs::path& dataset_dir, const std::string& scenario_name, int frames,
@@ -62,9 +49,28 @@ void RecordCachedDataset(const fs::path& dataset_dir, const std::string& scenari
   WriteFileAtomically(RecordPath(dataset_dir), record.dump(2) + "\n");
 }
 
+CachedDatasetCheck CheckCachedDataset(const fs::path& dataset_dir, bool always_hash) {
+  // Datasets this process has hashed (several scenarios of a suite may share one).
+  static std::mutex hashed_mutex;
+  static std::set<std::string> hashed;
+  const std::string key = fs::weakly_canonical(dataset_dir).string();
+  CachedDatasetCheck check;
+  {
+    std::lock_guard<std::mutex> lock(hashed_mutex);
+    check.hashed = always_hash || hashed.count(key) == 0;
+  }
+  const auto start = std::chrono::steady_clock::now();
+  check.problems = CheckListedFiles(dataset_dir, check.hashed);
+  check.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (check.hashed && check.problems.empty()) {
+    std::lock_guard<std::mutex> lock(hashed_mutex);
+    hashed.insert(key);
+  }
+  return check;
+}
+
 std::vector<CachedDataset> ListDatasetCache(const fs::path& cache_dir) {
   static const std::regex kDataset(R"(.+-[0-9a-f]{12})");
-  static const std::regex kLeftover(R"(\..+-[0-9a-f]{12}\.(partial|old)-([0-9]{1,10}))");
   std::vector<CachedDataset> entries;
   std::error_code error;
   if (!fs::is_directory(cache_dir, error)) return entries;
@@ -72,11 +78,12 @@ std::vector<CachedDataset> ListDatasetCache(const fs::path& cache_dir) {
     std::error_code type_error;
     if (!item.is_directory(type_error)) continue;
     const std::string name = item.path().filename().string();
-    std::smatch match;
     CachedDataset entry;
     entry.dir = item.path();
-    if (std::regex_match(name, match, kLeftover)) {
-      if (!ProcessIsGone(std::stoll(match[2].str()))) continue;  // a generation still at work
+    if (const std::optional<StagingLeftover> leftover = ParseStagingLeftover(item.path());
+        leftover && std::regex_match(leftover->target_name, kDataset)) {
+      // A generation still at work, or one of another host sharing the folder, is left be.
+      if (!IsAbandoned(*leftover)) continue;
       entry.leftover = true;
     } else if (std::regex_match(name, kDataset) && HoldsSegslamManifest(item.path())) {
       const fs::path record = RecordPath(item.path());

@@ -17,10 +17,23 @@ struct CachedDataset {
   std::filesystem::path dir;
   std::string code_version;  // of the build that generated it; empty: no record
   std::uintmax_t bytes = 0;
-  // A staging folder (.<name>-<key>.partial-<pid>, .old-<pid>) whose process is gone:
-  // what a generation killed half-way leaves.
+  // A staging folder (.<name>-<key>.partial-<pid>@<host>, .old-<pid>@<host>) whose
+  // process on this host is gone: what a generation killed half-way leaves. One of
+  // another host (a cache on a shared file system) is not listed.
   bool leftover = false;
 };
+
+// A cached dataset checked against its manifest.json before it is reused.
+struct CachedDatasetCheck {
+  std::vector<std::string> problems;  // one per file (core/manifest.h: CheckListedFiles); empty: intact
+  bool hashed = false;                // SHA-256s were compared, not only sizes
+  double seconds = 0;
+};
+
+// Every file the manifest lists must be there with its size, each time (a stat per file);
+// its SHA-256 is compared too the first time this process checks the dataset, or every
+// time with `always_hash` (an edited PNG may keep its size).
+CachedDatasetCheck CheckCachedDataset(const std::filesystem::path& dataset_dir, bool always_hash = false);
 
 // Writes the record of `dataset_dir` (atomically), e.g. after generating it.
 void RecordCachedDataset(const std::filesystem::path& dataset_dir, const std::string& scenario_name, int frames,

@@ -3,8 +3,13 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <unistd.h>
+
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/json_file.h"
+#include "core/manifest.h"
+#include "core/output_folders.h"
 #include "seg/refiner_option_overrides.h"
 #include "slam/tracker_option_overrides.h"
 
@@ -24,8 +29,6 @@ PassRun RunPass(const DatasetRunOptions& args, const std::string& name, const fs
                 const fs::path& map_in, const fs::path& map_out, const fs::path& out_dir,
                 const std::optional<Eigen::Isometry3d>& fixed_alignment, bool in_map_frame = false) {
   const TumSequence sequence = TumSequence::OpenWithCameraFile(sequence_dir, args.camera_file);
-  // What an earlier run of another kind left here would be read as this run's.
-  for (const char* stale : {"seg.json", "refined_masks"}) fs::remove_all(out_dir / stale);
   SlamRunOptions options;
   options.mode = slam::ParseSlamMode(args.mode);
   options.masks = args.masks;
@@ -42,11 +45,13 @@ PassRun RunPass(const DatasetRunOptions& args, const std::string& name, const fs
   };
   PassRun outcome;
   outcome.name = name;
+  outcome.sequence = {sequence_dir, sequence.entries().front().rgb_file, sequence.FirstFrameSha256()};
   outcome.aligned = !fixed_alignment.has_value() && !in_map_frame;
   outcome.run = RunSlamOnSequence(sequence, options);
 
   fs::create_directories(out_dir);
-  // The header says which masks gave the instance ids of frames.jsonl (eval needs it).
+  // The header says which masks gave the instance ids of frames.jsonl, and how many frames
+  // the run read, so that eval can tell a complete frames.jsonl (both eval needs).
   const std::string simulated =
       fmt::format("simulated {} seed {}", SimulatedSegmenterLabel(args.segmenter, args.strength), args.seed);
   const std::string masks = args.mode == "plain"       ? "none"
@@ -54,9 +59,9 @@ PassRun RunPass(const DatasetRunOptions& args, const std::string& name, const fs
                             : args.masks == "gt"       ? "gt"
                                                        : "external " + args.masks;
   WriteTumTrajectory(out_dir / "trajectory.txt", outcome.run.trajectory,
-                     fmt::format("segslam run, mode {}, sequence {}\ninstance masks: {}\ncamera-to-world T_wc of "
-                                 "localized frames",
-                                 args.mode, sequence_dir.string(), masks));
+                     fmt::format("segslam run, mode {}, sequence {}\ninstance masks: {}\nframes run: {}\n"
+                                 "camera-to-world T_wc of localized frames",
+                                 args.mode, sequence_dir.string(), masks, outcome.run.frames.size()));
   WriteFrameLog(out_dir / "frames.jsonl", outcome.run.frames);
   if (outcome.run.segmentation.has_value()) {
     const LoopSegmentationScores& scores = *outcome.run.segmentation;
@@ -127,27 +132,175 @@ void CheckDatasetRunOptions(const DatasetRunOptions& options) {
   }
 }
 
+namespace {
+
+// run.json: what the run read, per pass (SequenceIdentity), and that the folder is a run's.
+void WriteRunRecord(const fs::path& dir, const fs::path& dataset, const DatasetRunOptions& options,
+                    const std::vector<std::pair<std::string, PassRun>>& passes) {
+  nlohmann::json records = nlohmann::json::array();
+  for (const auto& [folder, pass] : passes) {
+    records.push_back({{"name", pass.name},
+                       {"folder", folder},
+                       {"sequence", pass.sequence.sequence_dir.string()},
+                       {"first_frame", pass.sequence.first_frame},
+                       {"first_frame_sha256", pass.sequence.first_frame_sha256}});
+  }
+  const nlohmann::json record = {{"format", "segslam-run-1"},
+                                 {"mode", options.mode},
+                                 {"dataset", dataset.string()},
+                                 {"frames_per_sequence_limit", options.frames},
+                                 {"passes", records}};
+  WriteFileAtomically(dir / kRunRecordFile, record.dump(2) + "\n");
+}
+
+// A file outside the run's folder (--map-out elsewhere): written under a hidden name beside
+// its place and moved there just before the run's folder is, so that a run that fails
+// leaves neither; removed if never moved.
+class PendingFile {
+ public:
+  explicit PendingFile(fs::path target)
+      : target_(std::move(target)),
+        pending_(target_.parent_path() /
+                 (".partial-" + std::to_string(static_cast<long>(::getpid())) + "-" + target_.filename().string())) {}
+  PendingFile(const PendingFile&) = delete;
+  PendingFile& operator=(const PendingFile&) = delete;
+  ~PendingFile() {
+    std::error_code ignored;
+    if (!moved_) fs::remove(pending_, ignored);
+  }
+  const fs::path& path() const { return pending_; }
+  void MoveIntoPlace() {
+    std::error_code error;
+    fs::rename(pending_, target_, error);
+    if (error) throw FileError(target_, "cannot move the finished file here: " + error.message());
+    moved_ = true;
+  }
+
+ private:
+  fs::path target_, pending_;
+  bool moved_ = false;
+};
+
+// Where the long-term map goes while the run is staged: inside the staging folder when it
+// belongs to the run's folder (the default, or --map-out inside --out), else a pending
+// file beside --map-out (with its .ply).
+struct StagedMap {
+  fs::path path;  // empty: no map is written
+  std::optional<PendingFile> map, ply;
+};
+
+fs::path WithPlyExtension(fs::path path) { return path.replace_extension(".ply"); }
+
+void StageMap(const fs::path& map_out, const fs::path& out_dir, const fs::path& staging_dir, StagedMap* staged) {
+  if (map_out.empty()) return;
+  std::error_code error;
+  if (fs::is_directory(map_out, error)) {
+    throw FileError(map_out, "is a folder; --map-out takes the path of the map file to write, e.g. " +
+                                 (map_out / "map.segslam").string());
+  }
+  const fs::path relative = fs::weakly_canonical(map_out).lexically_relative(fs::weakly_canonical(out_dir));
+  if (!relative.empty() && *relative.begin() != "..") {
+    staged->path = staging_dir / relative;
+    fs::create_directories(staged->path.parent_path());
+    return;
+  }
+  const fs::path parent = map_out.parent_path().empty() ? fs::path(".") : map_out.parent_path();
+  fs::create_directories(parent, error);
+  if (error) throw FileError(parent, "cannot create the folder of --map-out: " + error.message());
+  staged->map.emplace(parent / map_out.filename());
+  staged->ply.emplace(WithPlyExtension(parent / map_out.filename()));
+  staged->path = staged->map->path();
+}
+
+}  // namespace
+
 std::vector<PassRun> RunDataset(const fs::path& dataset, const fs::path& out_dir, const DatasetRunOptions& options) {
   CheckDatasetRunOptions(options);
-  std::vector<PassRun> passes;
-  if (IsTwoPassDataset(dataset)) {
-    if (!options.map_in.empty()) {
-      throw Error("run: --map-in applies to a single sequence; " + dataset.string() + " has two passes");
-    }
-    const fs::path map1 = options.map_out.empty() ? out_dir / "pass1" / "map.segslam" : options.map_out;
-    fs::create_directories(map1.parent_path().empty() ? fs::path(".") : map1.parent_path());
-    passes.push_back(RunPass(options, "pass1", dataset / "pass1", {}, map1, out_dir / "pass1", std::nullopt));
+  const bool two_pass = IsTwoPassDataset(dataset);
+  if (two_pass && !options.map_in.empty()) {
+    throw Error("run: --map-in applies to a single sequence; " + dataset.string() + " has two passes");
+  }
+  // The outputs are one unit: written into a staging folder and moved into place only when
+  // every pass and the map are written. An existing --out is replaced only when it is a
+  // run's output; a file there, or a folder of other files, is refused before any frame.
+  StagingDirectory staging(out_dir, /*overwrite=*/true, ForeignContentOfRunOutput, "run output");
+  StagedMap map;
+  StageMap(two_pass && options.map_out.empty() ? out_dir / "pass1" / "map.segslam" : options.map_out, out_dir,
+           staging.path(), &map);
+  std::vector<std::pair<std::string, PassRun>> passes;  // (folder in the run's, pass)
+  if (two_pass) {
+    passes.emplace_back("pass1",
+                        RunPass(options, "pass1", dataset / "pass1", {}, map.path, staging.path() / "pass1", std::nullopt));
     // Pass 2 is scored in the map's frame: pass 1's alignment to the ground truth, not
     // a new one (the paper's Table III); without it, not at all.
     std::optional<Eigen::Isometry3d> alignment;
-    if (passes[0].ate.has_value()) alignment = passes[0].ate->T_gt_est;
-    passes.push_back(RunPass(options, "pass2", dataset / "pass2", map1, {}, out_dir / "pass2", alignment,
-                             /*in_map_frame=*/true));
+    if (passes[0].second.ate.has_value()) alignment = passes[0].second.ate->T_gt_est;
+    passes.emplace_back("pass2", RunPass(options, "pass2", dataset / "pass2", map.path, {}, staging.path() / "pass2",
+                                         alignment, /*in_map_frame=*/true));
   } else {
-    passes.push_back(RunPass(options, dataset.filename().string(), dataset, options.map_in, options.map_out, out_dir,
-                             std::nullopt));
+    passes.emplace_back(".", RunPass(options, dataset.filename().string(), dataset, options.map_in, map.path,
+                                     staging.path(), std::nullopt));
   }
-  return passes;
+  WriteRunRecord(staging.path(), dataset, options, passes);
+  if (map.map) map.map->MoveIntoPlace();
+  if (map.ply) map.ply->MoveIntoPlace();
+  staging.Commit();
+  std::vector<PassRun> result;
+  for (auto& [folder, pass] : passes) result.push_back(std::move(pass));
+  return result;
+}
+
+namespace {
+
+// The run.json that describes the pass folder `pass_dir` and the pass's folder in it:
+// its own (".") or, for pass1/ or pass2/, that of the run it is a pass of; none for a
+// run of a build before run.json.
+std::optional<std::pair<fs::path, std::string>> FindRunRecord(const fs::path& pass_dir) {
+  if (fs::exists(pass_dir / kRunRecordFile)) return std::make_pair(pass_dir / kRunRecordFile, std::string("."));
+  const fs::path dir = pass_dir.filename().empty() ? pass_dir.parent_path() : pass_dir;
+  const fs::path parent_record = (dir.has_parent_path() ? dir.parent_path() : fs::path(".")) / kRunRecordFile;
+  if (fs::exists(parent_record)) return std::make_pair(parent_record, dir.filename().string());
+  return std::nullopt;
+}
+
+std::string StringField(const nlohmann::json& json, const char* key) {
+  return json.is_object() && json.contains(key) && json.at(key).is_string() ? json.at(key).get<std::string>()
+                                                                             : std::string();
+}
+
+}  // namespace
+
+void CheckRunReadSequence(const fs::path& pass_dir, const fs::path& sequence_dir) {
+  const auto found = FindRunRecord(pass_dir);
+  if (!found) return;
+  const auto& [record_file, folder] = *found;
+  const nlohmann::json record = ReadJsonFile(record_file);
+  const nlohmann::json* pass = nullptr;
+  if (record.is_object() && record.contains("passes") && record.at("passes").is_array()) {
+    for (const nlohmann::json& entry : record.at("passes")) {
+      if (StringField(entry, "folder") == folder) pass = &entry;
+    }
+  }
+  const std::string first_frame = pass ? StringField(*pass, "first_frame") : "";
+  const std::string first_frame_sha256 = pass ? StringField(*pass, "first_frame_sha256") : "";
+  if (first_frame.empty() || first_frame_sha256.empty()) {
+    throw FileError(record_file, "eval: no record of the sequence that " + pass_dir.string() +
+                                     " read (expected \"passes\": [{\"folder\": \"" + folder +
+                                     "\", \"first_frame\", \"first_frame_sha256\"}])");
+  }
+  const std::string read = StringField(*pass, "sequence").empty() ? "another sequence" : StringField(*pass, "sequence");
+  const fs::path here = sequence_dir / first_frame;
+  const std::string mismatch = "eval: " + pass_dir.string() + " is a run of " + read + ", not of " +
+                               sequence_dir.string() + ": ";
+  std::error_code error;
+  if (!fs::is_regular_file(here, error)) {
+    throw Error(mismatch + "the first colour frame it read, " + first_frame + " (" + record_file.string() +
+                "), is not there; score a run against the dataset it read");
+  }
+  if (Sha256OfFile(here) != first_frame_sha256) {
+    throw Error(mismatch + "the first colour frame it read, " + first_frame + ", differs from " + here.string() +
+                " (SHA-256 recorded in " + record_file.string() + "); score a run against the dataset it read");
+  }
 }
 
 }  // namespace segslam::harness

@@ -2,11 +2,14 @@
 // a single TUM-layout sequence, or both passes of a generated dataset (pass 1 builds the
 // long-term map, pass 2 localizes on it: the paper's relocalization protocol). Shared by
 // `segslam run` and `segslam scenario run`, so both leave the same layout behind:
+//   OUT/run.json                 what the run read (SequenceIdentity per pass), its mode
 //   OUT/[passN/]trajectory.txt   TUM, camera-to-world T_wc of the localized frames
 //   OUT/[passN/]frames.jsonl     one JSON line per frame (harness/slam_runner.h)
 //   OUT/[passN/]seg.json         raw vs refined masks (mutual loop with ground-truth masks)
 //   OUT/[passN/]refined_masks/   the loop's refined masks
 //   OUT/pass1/map.segslam (+ .ply)  the long-term map of pass 1
+// OUT is one unit: staged beside its place and renamed there only when complete, with
+// the map (core/atomic_file.h's StagingDirectory).
 #pragma once
 
 #include <cstdint>
@@ -48,8 +51,18 @@ std::string SimulatedSegmenterLabel(const std::string& preset, double strength);
 // One sequence's run. `ate` is set where the sequence has ground truth and >= 3 poses
 // were estimated: pass 1 (or a single sequence) aligned by Horn's method, pass 2 moved by
 // pass 1's alignment and not re-aligned (scored in the map's frame, the paper's Table III).
+// What tells a sequence from another with the same frame stamps (two generated worlds of
+// one frame rate): its first colour file and that file's SHA-256, as a folder of masks
+// records them (seg/external_masks.h).
+struct SequenceIdentity {
+  std::filesystem::path sequence_dir;
+  std::string first_frame;  // relative to sequence_dir, e.g. "rgb/0.000000.png"
+  std::string first_frame_sha256;
+};
+
 struct PassRun {
   std::string name;  // "pass1", "pass2", or the sequence folder's name
+  SequenceIdentity sequence;  // what the pass read
   SlamRunResult run;
   std::optional<AteResult> ate;
   bool aligned = true;
@@ -66,10 +79,19 @@ bool RunsMutualLoop(const DatasetRunOptions& options);
 // range), so a command can refuse them before it prints or reads anything.
 void CheckDatasetRunOptions(const DatasetRunOptions& options);
 
-// Runs every pass and writes the outputs above under `out_dir`. Throws segslam::Error on
-// bad options (CheckDatasetRunOptions, and --map-in on a two-pass dataset) before
-// anything is written, and on unreadable input naming the file.
+// Runs every pass and writes the outputs above under `out_dir`, replacing an earlier run
+// output there. Throws segslam::Error, before anything is written, on bad options
+// (CheckDatasetRunOptions, and --map-in on a two-pass dataset), an `out_dir` that is a file
+// or a folder holding what a run does not write (core/output_folders.h), a map_out that
+// is a folder; and on unreadable input naming the file, leaving `out_dir` and map_out as
+// they were.
 std::vector<PassRun> RunDataset(const std::filesystem::path& dataset, const std::filesystem::path& out_dir,
                                 const DatasetRunOptions& options);
+
+// Throws segslam::Error, message starting "eval: " and naming both sequences, when the
+// run.json of the pass folder `pass_dir` (OUT, or OUT/pass1 with OUT/run.json) records a
+// first colour frame that `sequence_dir` lacks or holds with other bytes: a run of another
+// sequence. A run without run.json (from an older build) is not checked here.
+void CheckRunReadSequence(const std::filesystem::path& pass_dir, const std::filesystem::path& sequence_dir);
 
 }  // namespace segslam::harness

@@ -2,6 +2,7 @@
 // truth, computed as the TUM RGB-D benchmark's scripts do (harness/trajectory_metrics.h),
 // printed as a table and optionally written as JSON.
 #include "core/atomic_file.h"
+#include "harness/cli_numbers.h"
 #include "harness/commands.h"
 #include "harness/trajectory_metrics.h"
 
@@ -11,6 +12,7 @@
 #include <cmath>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 
 namespace segslam::harness {
@@ -50,7 +52,8 @@ int RunEvalTraj(const EvalTrajArgs& args) {
 
   const std::string delta_text =
       fmt::format("{:g} {}", args.rpe_delta, args.rpe_unit == "f" ? "frame(s)" : "s");
-  const ErrorStatistics rotation_deg = Scaled(evaluation.rpe.rotation_rad, kDegreesPerRadian);
+  const std::optional<ErrorStatistics> rotation_deg =
+      evaluation.rpe ? std::optional(Scaled(evaluation.rpe->rotation_rad, kDegreesPerRadian)) : std::nullopt;
   fmt::print("estimate     {}\nground truth {}\n", args.estimate, args.ground_truth);
   fmt::print("ATE: poses associated within {:g} s, {}\n", args.max_difference_s,
              ate_options.align ? "aligned by Horn's method (rotation and translation, no scale)"
@@ -59,8 +62,12 @@ int RunEvalTraj(const EvalTrajArgs& args) {
   fmt::print("{:<22} {:>6} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}\n", "metric", "pairs", "rmse",
              "mean", "median", "std", "min", "max");
   fmt::print("{}", TableRow("ATE translation [m]", evaluation.ate.translation_m));
-  fmt::print("{}", TableRow("RPE translation [m]", evaluation.rpe.translation_m));
-  fmt::print("{}", TableRow("RPE rotation [deg]", rotation_deg));
+  if (evaluation.rpe.has_value()) {
+    fmt::print("{}", TableRow("RPE translation [m]", evaluation.rpe->translation_m));
+    fmt::print("{}", TableRow("RPE rotation [deg]", *rotation_deg));
+  } else {
+    fmt::print("RPE: not computed: {}\n", evaluation.rpe_missing_reason);
+  }
 
   if (!args.json_file.empty()) {
     nlohmann::json T_gt_est = nlohmann::json::array();
@@ -77,11 +84,14 @@ int RunEvalTraj(const EvalTrajArgs& args) {
           {"aligned", ate_options.align},
           {"T_gt_est", T_gt_est},
           {"translation_m", StatisticsJson(evaluation.ate.translation_m)}}},
-        {"rpe",
-         {{"delta", args.rpe_delta},
-          {"delta_unit", args.rpe_unit},
-          {"translation_m", StatisticsJson(evaluation.rpe.translation_m)},
-          {"rotation_deg", StatisticsJson(rotation_deg)}}}};
+        {"rpe", evaluation.rpe.has_value()
+                    ? nlohmann::json{{"delta", args.rpe_delta},
+                                     {"delta_unit", args.rpe_unit},
+                                     {"translation_m", StatisticsJson(evaluation.rpe->translation_m)},
+                                     {"rotation_deg", StatisticsJson(*rotation_deg)}}
+                    : nlohmann::json{{"delta", args.rpe_delta},
+                                     {"delta_unit", args.rpe_unit},
+                                     {"missing_reason", evaluation.rpe_missing_reason}}}};
     WriteFileAtomically(args.json_file, json.dump(2) + "\n");
   }
   return 0;
@@ -100,13 +110,13 @@ void AddEvalTrajCommand(CLI::App& app, std::function<int()>* action) {
   command->add_option("estimate", args->estimate, "Estimated TUM trajectory file")->required();
   command->add_option("--max-difference", args->max_difference_s,
                       "ATE: largest stamp difference of an associated pose pair, seconds")
-      ->check(CLI::PositiveNumber)
+      ->check(NumberIn(0, 1e6, /*min_excluded=*/true))
       ->capture_default_str();
   command->add_flag("--no-align", args->no_align,
                     "ATE: compare in the given frames, without Horn alignment (e.g. an "
                     "estimate relocalized in a map in the ground truth's frame)");
   command->add_option("--rpe-delta", args->rpe_delta, "RPE: distance of the compared poses")
-      ->check(CLI::PositiveNumber)
+      ->check(NumberIn(0, 1e6, /*min_excluded=*/true))
       ->capture_default_str();
   command->add_option("--rpe-unit", args->rpe_unit, "RPE: unit of --rpe-delta, s or f (frames)")
       ->check(CLI::IsMember({"s", "f"}))

@@ -2,6 +2,7 @@
 // and records their aliasing measure (harness/aliasing_report.h) in its manifest.json.
 #include "core/error.h"
 #include "harness/aliasing_report.h"
+#include "harness/cli_numbers.h"
 #include "harness/commands.h"
 #include "harness/interrupt.h"
 #include "harness/progress_bar.h"
@@ -105,10 +106,10 @@ void AddGenerateCommand(CLI::App& app, std::function<int()>* action) {
   command->add_option("--gl", args->gl, "Off-screen GL back-end: osmesa or egl")
       ->capture_default_str();
   command->add_option("--frames", args->frames, "Render at most N frames per pass (0 = all)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(WholeNumberIn(0, kMaxFrames, "0 = all"));
   command->add_option("--threads", args->threads,
                       "Threads for sensor noise and PNG encoding (0 = all cores)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(WholeNumberIn(0, kMaxThreads, "0 = all cores"));
   command->add_option("--set", args->overrides,
                       "Override a scenario key, e.g. --set city.moving_cars=8 (repeatable)");
   command->add_flag("--force", args->force, "Replace an existing output directory");

@@ -10,7 +10,9 @@
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
+#include "core/output_folders.h"
 #include "core/tum_dataset.h"
+#include "harness/cli_numbers.h"
 #include "harness/commands.h"
 #include "harness/interrupt.h"
 #include "harness/progress_bar.h"
@@ -135,7 +137,8 @@ int RunMasksImport(const MasksImportArgs& args) {
                                                 *part == '\0' ? std::string("folder") : std::string(part) + "/"));
     }
   }
-  StagingDirectory staging(args.out_dir, args.force);
+  // --force replaces only a folder masks import wrote, never one that holds other files.
+  StagingDirectory staging(args.out_dir, args.force, ForeignContentOfMaskFolder, "folder of masks");
   const cv::Size size(sequence.camera().intrinsics.width, sequence.camera().intrinsics.height);
   ProgressBar bar("masks import " + fs::path(args.sequence_dir).filename().string());
   const auto start = std::chrono::steady_clock::now();
@@ -269,7 +272,7 @@ void AddMasksCommand(CLI::App& app, std::function<int()>* action) {
   import->add_option("--images", import_args->images_file,
                      "The COCO image list the network ran on, for integer image ids (e.g. from `masks images`)");
   import->add_option("--min-score", import_args->min_score, "Drop detections scoring lower")
-      ->check(CLI::Range(0.0, 1.0))
+      ->check(NumberIn(0, 1))
       ->capture_default_str();
   import->add_option("--camera", import_args->camera_file,
                      "camera.yaml to use instead of the sequence's own (a real sequence without one)");
@@ -289,7 +292,7 @@ void AddMasksCommand(CLI::App& app, std::function<int()>* action) {
       ->check(CLI::IsMember(seg::SimulatedSegmenterOptions::PresetNames()));
   exported->add_option("--seed", export_args->seed, "Seed of the simulated segmenter")->capture_default_str();
   exported->add_option("--strength", export_args->strength, "Scale of the simulated segmenter's errors")
-      ->check(CLI::Range(0.0, 10.0))
+      ->check(NumberIn(0, 10))
       ->capture_default_str();
   exported->add_option("--camera", export_args->camera_file,
                        "camera.yaml to use instead of the sequence's own (a real sequence without one)");

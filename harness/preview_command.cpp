@@ -5,6 +5,7 @@
 #include "core/image_io.h"
 #include "core/atomic_file.h"
 #include "core/tum_dataset.h"
+#include "harness/cli_numbers.h"
 #include "harness/commands.h"
 #include "harness/pictures.h"
 
@@ -76,9 +77,12 @@ void AddPreviewCommand(CLI::App& app, std::function<int()>* action) {
       "preview", "Write a contact sheet of a sequence's frames: colour | depth | instance overlay");
   command->add_option("sequence", args->sequence_dir, "A TUM-layout sequence, e.g. data/city/pass1")
       ->required();
-  command->add_option("--frames", args->frames, "Frame indices, e.g. 0,30,59")->delimiter(',');
+  command->add_option("--frames", args->frames, "Frame indices, e.g. 0,30,59")
+      ->delimiter(',')
+      ->check(WholeNumberIn(0, kMaxFrames));
   command->add_option("--out,-o", args->out_file, "Output PNG")->required();
-  command->add_option("--max-depth", args->max_depth_m, "Depth colour scale in metres (0 = auto)");
+  command->add_option("--max-depth", args->max_depth_m, "Depth colour scale in metres (0 = auto)")
+      ->check(NumberIn(0, 1e6));
   command->add_option("--camera", args->camera_file,
                       "camera.yaml to use instead of the sequence's own (its depth_factor scales the depth "
                       "of a real sequence without one)");

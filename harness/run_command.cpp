@@ -14,6 +14,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "harness/cli_numbers.h"
 #include "harness/commands.h"
 #include "harness/interrupt.h"
 #include "harness/progress_bar.h"
@@ -182,12 +183,13 @@ void AddRunCommand(CLI::App& app, std::function<int()>* action) {
   cmd->add_option("--seed", args->seed, "Seed of the simulated segmenter")->capture_default_str();
   cmd->add_option("--strength", args->strength,
                   "Scale of the simulated segmenter's errors (0 = ground truth, 1 = the preset, 2 = twice as bad)")
-      ->check(CLI::Range(0.0, 10.0))
+      ->check(NumberIn(0, 10))
       ->capture_default_str();
   cmd->add_option("--map-in", args->map_in, "Localize on this long-term map (single sequence)");
   cmd->add_option("--map-out", args->map_out, "Write the long-term map here (and a .ply beside it)");
   cmd->add_option("--out,-o", args->out_dir, "Output folder (default DATASET/run_MODE)");
-  cmd->add_option("--frames", args->frames, "Only the first N frames of each sequence (0 = all)");
+  cmd->add_option("--frames", args->frames, "Only the first N frames of each sequence (0 = all)")
+      ->check(WholeNumberIn(0, kMaxFrames, "0 = all"));
   cmd->add_option("--camera", args->camera_file,
                   "camera.yaml to use instead of the sequence's own (for a real sequence without one)");
   cmd->add_option("--tracker", args->tracker_options,

@@ -13,6 +13,8 @@
 
 #include "core/error.h"
 #include "core/image_io.h"
+#include "core/input_file.h"
+#include "core/json_file.h"
 #include "core/pose.h"
 #include "core/tracks.h"
 #include "core/tum_dataset.h"
@@ -41,17 +43,19 @@ struct LoggedFrame {
   int index = 0;
   double stamp_s = 0;
   std::string rgb_file;  // the dataset's file of this frame (rgb.txt), set by MatchToSequence
+  bool tracked = false;    // a pose in trajectory.txt: status "tracking" or "relocalized"
   bool localized = false;
   int features = 0;  // extracted in the frame
   std::vector<LoggedInstance> instances;
 };
 
-// frames.jsonl as slam_runner.cpp's WriteFrameLog writes it; a localized frame is one
-// whose status is not "lost", and on a loaded map one on that map
+// frames.jsonl as slam_runner.cpp's WriteFrameLog writes it: one line per frame the run
+// read, frames 0, 1, 2 ... in order, each once, with a status WriteFrameLog writes. A
+// localized frame is one whose status is not "lost", and on a loaded map one on that map
 // (slam::FrameResult::localized_on_map()).
 std::vector<LoggedFrame> ReadFrameLog(const fs::path& path) {
-  std::ifstream in(path);
-  if (!in) throw FileError(path, "eval: missing frame log; is this an output folder of segslam run?");
+  if (!fs::exists(path)) throw FileError(path, "eval: missing frame log; is this an output folder of segslam run?");
+  std::ifstream in = OpenInputFile(path);
   std::vector<LoggedFrame> frames;
   int line_number = 0;
   for (std::string line; std::getline(in, line);) {
@@ -62,9 +66,20 @@ std::vector<LoggedFrame> ReadFrameLog(const fs::path& path) {
       const nlohmann::json json = nlohmann::json::parse(line);
       LoggedFrame frame;
       frame.index = json.at("frame").get<int>();
+      // Each frame once, in the order the run read them: a line repeated or left out
+      // would count twice or not at all.
+      if (frame.index != static_cast<int>(frames.size())) {
+        throw Error(where + fmt::format("frame {} where frame {} was expected (a run logs frames 0, 1, 2 ... each "
+                                        "once, in order)",
+                                        frame.index, frames.size()));
+      }
       frame.stamp_s = json.at("stamp").get<double>();
       const std::string status = json.at("status").get<std::string>();
-      frame.localized = status != "lost" && json.value("on_long_term_map", true);
+      if (status != "tracking" && status != "relocalized" && status != "lost") {
+        throw Error(where + "unknown status '" + PrintableText(status) + "' (expected tracking, relocalized or lost)");
+      }
+      frame.tracked = status != "lost";
+      frame.localized = frame.tracked && json.value("on_long_term_map", true);
       frame.features = json.value("features", 0);
       for (const nlohmann::json& instance : json.at("instances")) {
         frame.instances.push_back({instance.at("id").get<int>(), instance.at("judged").get<bool>(),
@@ -82,7 +97,7 @@ std::vector<LoggedFrame> ReadFrameLog(const fs::path& path) {
 // A value of trajectory.txt's header: "# segslam run, mode mutual, sequence ..." gives
 // ("mode ", ",") -> "mutual"; "# instance masks: gt" gives ("instance masks: ", "") -> "gt".
 std::string HeaderValue(const fs::path& trajectory_file, const std::string& marker, const std::string& end_marker) {
-  std::ifstream in(trajectory_file);
+  std::ifstream in = OpenInputFile(trajectory_file);
   for (std::string line; std::getline(in, line) && line.rfind('#', 0) == 0;) {
     const auto start = line.find(marker);
     if (start == std::string::npos) continue;
@@ -111,8 +126,9 @@ nlohmann::json StatisticsJson(const std::optional<ErrorStatistics>& s) {
 
 nlohmann::json NumberJson(double value) { return std::isnan(value) ? nlohmann::json(nullptr) : nlohmann::json(value); }
 
-// Every frame the run logged must be a frame of the dataset's sequence; each gets its
-// rgb file (whose stem names its masks).
+// Every frame the run logged must be the frame of the dataset's sequence at its index
+// (a run reads the sequence's first N frames); each gets its rgb file (whose stem names
+// its masks).
 void MatchToSequence(const fs::path& frame_log, std::vector<LoggedFrame>& frames, const fs::path& sequence_dir) {
   // The frames' stamps and colour files as the run read them: associations.txt when the
   // sequence has one (then it needs no rgb.txt), else rgb.txt.
@@ -132,7 +148,48 @@ void MatchToSequence(const fs::path& frame_log, std::vector<LoggedFrame>& frames
       throw Error(fmt::format("eval: {}: frame {} (stamp {:.6f}) is not a frame of {}: the run is of another sequence",
                               frame_log.string(), frame.index, frame.stamp_s, sequence_dir.string()));
     }
+    if (above - sequence_frames.begin() != frame.index) {
+      throw Error(fmt::format("eval: {}: frame {} has the stamp {:.6f} of the sequence's frame {} in {}: the log is "
+                              "out of step with the sequence",
+                              frame_log.string(), frame.index, frame.stamp_s, above - sequence_frames.begin(),
+                              sequence_dir.string()));
+    }
     frame.rgb_file = above->rgb_file;
+  }
+}
+
+// frames.jsonl against the trajectory written with it (and the count of frames the run
+// read, where its header records it): every frame the log calls tracked has a pose, and
+// every pose belongs to such a frame. A log cut short, lines left out, or a trajectory of
+// another run fail here rather than be scored.
+void CheckFrameLogAgainstTrajectory(const fs::path& frame_log, const std::vector<LoggedFrame>& frames,
+                                    const fs::path& trajectory_file, const std::vector<StampedPose>& estimate) {
+  const std::string frames_run = HeaderValue(trajectory_file, "frames run: ", "");
+  if (!frames_run.empty() && frames_run != std::to_string(frames.size())) {
+    throw Error(fmt::format("eval: {}: {} frame(s), but {} says the run read {}: the frame log is incomplete or "
+                            "from another run",
+                            frame_log.string(), frames.size(), trajectory_file.string(), PrintableText(frames_run)));
+  }
+  std::size_t pose = 0;
+  for (const LoggedFrame& frame : frames) {
+    const bool has_pose = pose < estimate.size() && std::abs(estimate[pose].stamp_s - frame.stamp_s) <= kStampToleranceS;
+    if (pose < estimate.size() && estimate[pose].stamp_s < frame.stamp_s - kStampToleranceS) break;  // reported below
+    if (frame.tracked && !has_pose) {
+      throw Error(fmt::format("eval: {}: frame {} (stamp {:.6f}) is tracked, but {} has no pose for it: the two "
+                              "files are not of one run",
+                              frame_log.string(), frame.index, frame.stamp_s, trajectory_file.string()));
+    }
+    if (!frame.tracked && has_pose) {
+      throw Error(fmt::format("eval: {}: frame {} (stamp {:.6f}) is lost, but {} has a pose for it: the two files "
+                              "are not of one run",
+                              frame_log.string(), frame.index, frame.stamp_s, trajectory_file.string()));
+    }
+    if (has_pose) ++pose;
+  }
+  if (pose < estimate.size()) {
+    throw Error(fmt::format("eval: {}: the pose at stamp {:.6f} has no tracked frame in {} ({} frame(s)): the frame "
+                            "log is cut short or not of this run",
+                            trajectory_file.string(), estimate[pose].stamp_s, frame_log.string(), frames.size()));
   }
 }
 
@@ -280,9 +337,8 @@ void ScoreRpe(const std::vector<StampedPose>& ground_truth, const std::vector<St
 // Raw vs refined masks, where the mutual loop scored them (seg.json of a run).
 void ReadLoopSegmentationScores(const fs::path& seg_file, PassEvaluation* pass) {
   if (!fs::exists(seg_file)) return;
-  std::ifstream in(seg_file);
+  const nlohmann::json seg = ReadJsonFile(seg_file);
   try {
-    const nlohmann::json seg = nlohmann::json::parse(in);
     pass->seg_raw = MaskScoresFromJson(seg.at("raw"));
     pass->seg_refined = MaskScoresFromJson(seg.at("refined"));
     pass->segmenter = seg.value("segmenter", "");
@@ -327,6 +383,8 @@ PassEvaluation EvaluatePass(const std::string& name, const fs::path& run_dir, co
     throw Error("eval: " + trajectory_file.string() + ": no trajectory; is " + run_dir.string() +
                 " an output folder of segslam run?");
   }
+  // Stamps alone do not tell two generated worlds of one frame rate apart.
+  CheckRunReadSequence(run_dir, sequence_dir);
   const fs::path frame_log = run_dir / "frames.jsonl";
   std::vector<LoggedFrame> frames = ReadFrameLog(frame_log);
   MatchToSequence(frame_log, frames, sequence_dir);
@@ -338,6 +396,7 @@ PassEvaluation EvaluatePass(const std::string& name, const fs::path& run_dir, co
 
   const std::vector<StampedPose> ground_truth = ReadTumTrajectory(ground_truth_file);
   const std::vector<StampedPose> estimate = ReadTumTrajectory(trajectory_file);
+  CheckFrameLogAgainstTrajectory(frame_log, frames, trajectory_file, estimate);
 
   ScoreAte(ground_truth, estimate, fixed_alignment, in_map_frame, &pass);
   ScoreRpe(ground_truth, estimate, &pass);

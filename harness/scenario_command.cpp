@@ -34,6 +34,7 @@
 #include "core/error.h"
 #include "core/json_file.h"
 #include "core/tum_dataset.h"
+#include "harness/cli_numbers.h"
 #include "harness/commands.h"
 #include "harness/dataset_cache.h"
 #include "harness/dataset_run.h"
@@ -308,22 +309,53 @@ void ClaimReportFolder(const fs::path& report_dir, const fs::path& scenario_file
   WriteFileAtomically(mark, "A segslam scenario report: `segslam scenario run` replaces what is here.\n");
 }
 
+// --junit names the file to write: a folder there, empty or not, is refused (never
+// removed), and the file's folder is made now rather than found missing after the runs.
+void PrepareJUnitPath(const fs::path& junit_file) {
+  std::error_code error;
+  if (fs::is_directory(junit_file, error)) {
+    throw FileError(junit_file, "is a folder; --junit takes the path of the JUnit XML file to write, e.g. " +
+                                    (junit_file / "junit.xml").string());
+  }
+  if (junit_file.has_parent_path()) {
+    fs::create_directories(junit_file.parent_path(), error);
+    if (error) throw FileError(junit_file.parent_path(), "cannot make the folder of --junit: " + error.message());
+  }
+}
+
 // The scenario's dataset in `dataset`, generated once per effective scenario and code
 // version. The generator writes into a staging folder and renames it, so an existing
-// folder is complete. Returns whether it was there already.
+// folder was complete; it is checked against its manifest.json before reuse
+// (CheckCachedDataset) and generated anew if a file has changed since. Returns whether it
+// was there already and intact.
 bool EnsureDataset(const scenes::Scenario& scenario, const fs::path& dataset, const ScenarioRunRequest& args,
                    sim::GlBackend backend, const std::atomic<bool>* cancel) {
-  const bool cached = IsTwoPassDataset(dataset);
+  bool cached = IsTwoPassDataset(dataset);
+  bool damaged = false;
   if (cached) {
-    fmt::print("dataset {} (cached)\n", dataset.string());
+    // A file edited, cut or deleted since generation would be read as the scenario's.
+    const CachedDatasetCheck check = CheckCachedDataset(dataset);
+    if (check.problems.empty()) {
+      fmt::print("dataset {} (cached; {} manifest.json in {:.1f} s)\n", dataset.string(),
+                 check.hashed ? "sizes and SHA-256s match its" : "sizes match its", check.seconds);
+    } else {
+      fmt::print("dataset {} (cached) differs from its manifest.json in {} file(s), e.g. {}; generating it anew\n",
+                 dataset.string(), check.problems.size(), check.problems.front());
+      cached = false;
+      damaged = true;
+    }
     std::fflush(stdout);
-  } else {
+  }
+  if (!cached) {
     sim::GenerateOptions generate_options;
     generate_options.backend = backend;
     generate_options.max_frames_per_pass = args.frames;
     generate_options.cancel = cancel;
-    generate_options.overwrite = true;  // a folder there that is not a dataset is replaced
-    generate_options.keep_complete_dataset = true;  // one another shard finished meanwhile is not
+    // Replaces a dataset there (one that failed its check); a folder that is no dataset
+    // is refused (core/output_folders.h).
+    generate_options.overwrite = true;
+    // One another shard finished meanwhile is kept; not the damaged one just found.
+    generate_options.keep_complete_dataset = !damaged;
     fs::create_directories(dataset.parent_path());
     ProgressBar bar(args.progress_prefix + "generate " + scenario.name);
     const sim::GenerateSummary summary =
@@ -390,6 +422,7 @@ ScenarioReport RunScenarioToReport(const ScenarioRunRequest& args) {
   for (const std::string& name : skipped) fmt::print("expectation {} not checked: --modes leaves its mode out\n", name);
 
   std::fflush(stdout);
+  if (!args.junit_file.empty()) PrepareJUnitPath(args.junit_file);
   ClaimReportFolder(report_dir, args.scenario_file);
   // An earlier report in the same place goes first (before a generation that may fail or
   // be interrupted), so a run that stops half-way leaves no results.json or JUnit file
@@ -514,7 +547,7 @@ void AddScenarioCommand(CLI::App& app, std::function<int()>* action) {
       ->required();
   run->add_option("--out,-o", args->out_dir, "Report directory (default reports/<scenario name>)");
   run->add_option("--repeats", args->repeats, "Runs per mode, seeds bench.seed.. (default: bench.repeats, else 10)")
-      ->check(CLI::PositiveNumber);
+      ->check(WholeNumberIn(1, kMaxRepeats));
   run->add_option("--modes", args->modes, "Comma-separated modes (default: bench.modes, else plain,mask-moveable,mutual)");
   run->add_option("--segmenter", args->segmenter,
                   "Simulated segmenter preset for mask-moveable and mutual, or gt (default: bench.segmenter, else "
@@ -522,10 +555,10 @@ void AddScenarioCommand(CLI::App& app, std::function<int()>* action) {
   run->add_option("--jobs,-j", args->jobs,
                 "Runs at a time, each on its own thread (a run uses about one core; the results do not "
                 "depend on it)")
-      ->check(CLI::PositiveNumber)
+      ->check(WholeNumberIn(1, kMaxThreads))
       ->capture_default_str();
   run->add_option("--frames", args->frames, "Generate and run only the first N frames per pass (0 = all)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(WholeNumberIn(0, kMaxFrames, "0 = all"));
   run->add_option("--junit", args->junit_file, "Also write JUnit XML, one testcase per expectation");
   run->add_option("--cache", args->cache_dir, "Folder of cached datasets (<name>-<hash> inside)")->capture_default_str();
   run->add_option("--set", args->overrides, "Override a scenario key, e.g. --set city.moving_cars=8 (repeatable)");

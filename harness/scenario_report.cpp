@@ -575,7 +575,7 @@ bool BenchSettings::ModeIsDeterministic(const std::string& mode) const {
 
 MetricName ParseMetricName(const std::string& text, const std::vector<std::string>& modes, const std::string& origin) {
   auto unknown = [&](const std::string& why) {
-    return Error(origin + ": expect: unknown metric '" + text + "': " + why +
+    return Error(origin + ": expect: unknown metric '" + PrintableText(text) + "': " + why +
                  " (names: [pass1.|pass2.]MODE.METRIC or [pass1.|pass2.]MODE_vs_MODE.METRIC_ratio, modes " +
                  Join(modes, ", ") + ")");
   };

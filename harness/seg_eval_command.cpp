@@ -7,6 +7,7 @@
 #include "core/instances.h"
 #include "core/tracks.h"
 #include "core/tum_dataset.h"
+#include "harness/cli_numbers.h"
 #include "harness/commands.h"
 #include "harness/interrupt.h"
 #include "harness/pictures.h"
@@ -174,7 +175,7 @@ void AddSegEvalCommand(CLI::App& app, std::function<int()>* action) {
   command->add_option("--segmenter", args->segmenter, "Simulated segmenter preset (fcis-like, clean, ...)")
       ->capture_default_str();
   command->add_option("--strength", args->strength, "Scale of the simulated segmenter's errors")
-      ->check(CLI::NonNegativeNumber)
+      ->check(NumberIn(0, 10))
       ->capture_default_str();
   command->add_option("--seed", args->seed, "Seed of the simulated segmenter")->capture_default_str();
   command->add_option("--masks", args->masks_dir, "Use external masks from this folder instead");

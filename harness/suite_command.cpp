@@ -27,6 +27,8 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/statistics.h"
+#include "core/yaml_file.h"
+#include "harness/cli_numbers.h"
 #include "harness/commands.h"
 #include "harness/dataset_run.h"
 #include "harness/machine.h"
@@ -55,16 +57,11 @@ struct Suite {
 
 Suite LoadSuite(const fs::path& file) {
   const std::string origin = file.string();
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(origin);
-  } catch (const YAML::Exception& e) {
-    throw Error(origin + ": " + e.what());
-  }
+  const YAML::Node root = LoadYamlFile(file);
   if (!root.IsMap()) throw Error(origin + ": a suite file is a map with name: and entries:");
   for (const auto& key : root) {
     const std::string k = key.first.as<std::string>();
-    if (k != "name" && k != "entries") throw Error(origin + ": unknown key '" + k + "' (known: name, entries)");
+    if (k != "name" && k != "entries") throw Error(origin + ": unknown key '" + PrintableText(k) + "' (known: name, entries)");
   }
   Suite suite;
   suite.name = root["name"] ? root["name"].as<std::string>() : file.stem().string();
@@ -79,7 +76,7 @@ Suite LoadSuite(const fs::path& file) {
     for (const auto& key : node) {
       const std::string k = key.first.as<std::string>();
       if (k != "name" && k != "scenario" && k != "set" && k != "tables") {
-        throw Error(where + ": unknown key '" + k + "' (known: name, scenario, set, tables)");
+        throw Error(where + ": unknown key '" + PrintableText(k) + "' (known: name, scenario, set, tables)");
       }
     }
     SuiteEntry entry;
@@ -90,7 +87,7 @@ Suite LoadSuite(const fs::path& file) {
     });
     // It names the entry's report folder: "." or ".." would be the suite's own or its parent.
     if (!plain_name || entry.name == "." || entry.name == "..") {
-      throw Error(where + ": name '" + entry.name + "' must be letters, digits, '.', '_' or '-', and not . or ..");
+      throw Error(where + ": name '" + PrintableText(entry.name) + "' must be letters, digits, '.', '_' or '-', and not . or ..");
     }
     if (!names.insert(entry.name).second) throw Error(where + ": name '" + entry.name + "' is used twice");
     entry.scenario = file.parent_path() / node["scenario"].as<std::string>();
@@ -105,7 +102,7 @@ Suite LoadSuite(const fs::path& file) {
     for (const auto& item : node["tables"]) {
       const std::string table = item.as<std::string>();
       if (!kTables.count(table)) {
-        throw Error(where + ": tables: unknown table '" + table + "' (known: ate, segmentation, relocalization)");
+        throw Error(where + ": tables: unknown table '" + PrintableText(table) + "' (known: ate, segmentation, relocalization)");
       }
       entry.tables.insert(table);
     }
@@ -411,16 +408,16 @@ void AddSuiteCommand(CLI::App& scenario, std::function<int()>* action) {
   suite->add_option("suite", args->suite_file, "Suite YAML file")->required();
   suite->add_option("--out,-o", args->out_dir, "Report directory (default reports/<suite name>)");
   suite->add_option("--repeats", args->run.repeats, "Runs per mode (default: each scenario's bench.repeats)")
-      ->check(CLI::PositiveNumber);
+      ->check(WholeNumberIn(1, kMaxRepeats));
   suite->add_option("--modes", args->run.modes, "Comma-separated modes (default: each scenario's bench.modes)");
   suite->add_option("--segmenter", args->run.segmenter, "Simulated segmenter preset, or gt");
   suite->add_option("--jobs,-j", args->run.jobs,
                   "Runs at a time, each on its own thread (a run uses about one core; the results do not "
                   "depend on it)")
-      ->check(CLI::PositiveNumber)
+      ->check(WholeNumberIn(1, kMaxThreads))
       ->capture_default_str();
   suite->add_option("--frames", args->run.frames, "Only the first N frames per pass (0 = all)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(WholeNumberIn(0, kMaxFrames, "0 = all"));
   suite->add_option("--cache", args->run.cache_dir, "Folder of cached datasets")->capture_default_str();
   suite->add_option("--gl", args->run.gl, "Off-screen GL back-end for generation: osmesa or egl")->capture_default_str();
   suite->add_flag("-q,--quiet", args->run.quiet, "No progress bars");

@@ -15,6 +15,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/json_file.h"
+#include "core/yaml_file.h"
 #include "harness/dataset_run.h"
 #include "harness/report_document.h"
 #include "harness/machine.h"
@@ -204,26 +205,19 @@ bool SweepFile::Recognize(const fs::path& file) {
   try {
     const YAML::Node root = YAML::LoadFile(file.string());
     return root.IsMap() && root["axes"];
-  } catch (const YAML::Exception&) {
-    return false;  // not YAML at all: the scenario reader says what is wrong
+  } catch (const std::exception&) {
+    return false;  // not YAML at all, or not a file: the scenario reader says what is wrong
   }
 }
 
 SweepFile SweepFile::Load(const fs::path& file) {
   const std::string origin = file.string();
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(origin);
-  } catch (const YAML::BadFile&) {
-    throw Error(origin + ": cannot open sweep file");
-  } catch (const YAML::ParserException& e) {
-    throw Error(origin + ": line " + std::to_string(e.mark.line + 1) + ": " + e.msg);
-  }
+  const YAML::Node root = LoadYamlFile(file);
   if (!root.IsMap()) throw Error(origin + ": a sweep file is a map with scenario: and axes:");
   for (const auto& entry : root) {
     const std::string key = entry.first.Scalar();
     if (key != "name" && key != "scenario" && key != "set" && key != "axes") {
-      throw Error(origin + ": unknown key '" + key + "' (known: name, scenario, set, axes)");
+      throw Error(origin + ": unknown key '" + PrintableText(key) + "' (known: name, scenario, set, axes)");
     }
   }
   SweepFile sweep;

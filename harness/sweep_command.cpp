@@ -13,7 +13,9 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/input_file.h"
 #include "core/json_file.h"
+#include "harness/cli_numbers.h"
 #include "harness/commands.h"
 #include "harness/scenario_runner.h"
 #include "harness/sweep.h"
@@ -193,10 +195,7 @@ int RunSweepMerge(const SweepMergeArgs& args) {
   const fs::path out_dir = args.out_dir.empty() ? inputs.front() : fs::path(args.out_dir);
   if (out_dir != inputs.front()) {
     fs::create_directories(out_dir);
-    std::ifstream in(inputs.front() / "sweep.json");
-    if (!in) throw Error("sweep merge: " + (inputs.front() / "sweep.json").string() + ": cannot be read");
-    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    WriteFileAtomically(out_dir / "sweep.json", text);
+    WriteFileAtomically(out_dir / "sweep.json", ReadFileText(inputs.front() / "sweep.json"));
   }
   fmt::print("{}", MergeSweep(inputs, out_dir));
   fmt::print("sweep merge: report in {}\n", (out_dir / "report.html").string());
@@ -222,16 +221,16 @@ void AddSweepCommand(CLI::App& app, std::function<int()>* action) {
   sweep->add_option("--shard", args->shard, "Run only shard I of N (I/N): point p belongs to shard p % N + 1")
       ->capture_default_str();
   sweep->add_option("--repeats", args->run.repeats, "Runs per mode and point (default: the scenario's bench.repeats)")
-      ->check(CLI::PositiveNumber);
+      ->check(WholeNumberIn(1, kMaxRepeats));
   sweep->add_option("--modes", args->run.modes, "Comma-separated modes (default: the scenario's bench.modes)");
   sweep->add_option("--segmenter", args->run.segmenter, "Simulated segmenter preset, or gt");
   sweep->add_option("--jobs,-j", args->run.jobs,
                   "Runs at a time, each on its own thread (a run uses about one core; the results do not "
                   "depend on it)")
-      ->check(CLI::PositiveNumber)
+      ->check(WholeNumberIn(1, kMaxThreads))
       ->capture_default_str();
   sweep->add_option("--frames", args->run.frames, "Only the first N frames per pass (0 = all)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(WholeNumberIn(0, kMaxFrames, "0 = all"));
   sweep->add_option("--cache", args->run.cache_dir, "Folder of cached datasets")->capture_default_str();
   sweep->add_option("--gl", args->run.gl, "Off-screen GL back-end for generation: osmesa or egl")->capture_default_str();
   sweep->add_flag("-q,--quiet", args->run.quiet, "No progress bars");

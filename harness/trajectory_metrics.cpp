@@ -24,6 +24,12 @@ std::vector<double> StampsOf(const std::vector<StampedPose>& trajectory, const c
     if (!std::isfinite(stamp) || !trajectory[i].T_wc.matrix().allFinite()) {
       throw Error(fmt::format("{} pose {} is not finite", name, i));
     }
+    if (const double distance_m = trajectory[i].T_wc.translation().stableNorm(); !(distance_m <= kMaxPositionM)) {
+      throw Error(fmt::format("{} pose {} (stamp {:.6f}) lies {:.3g} m from the origin; positions beyond {:g} m "
+                              "(10,000 km) are refused: no trajectory on Earth reaches them, and their errors "
+                              "overflow",
+                              name, i, stamp, distance_m, kMaxPositionM));
+    }
     if (i > 0 && !(stamp > stamps.back())) {
       throw Error(fmt::format("{} stamps do not strictly increase at pose {} ({:.6f} after "
                               "{:.6f})",
@@ -292,6 +298,15 @@ RpeResult ComputeRpe(const std::vector<StampedPose>& ground_truth,
   const std::vector<double> gt_stamps = StampsOf(ground_truth, "ground-truth");
   const std::vector<double> est_stamps = StampsOf(estimate, "estimate");
   CheckRpeOverlap(gt_stamps, est_stamps);
+  const double span = options.unit == RpeDeltaUnit::kSeconds ? est_stamps.back() - est_stamps.front()
+                                                             : static_cast<double>(est_stamps.size() - 1);
+  if (span < options.delta) {
+    throw Error(options.unit == RpeDeltaUnit::kSeconds
+                    ? fmt::format("RPE needs poses at least the delta of {:g} s apart; the estimate spans {:.3f} s",
+                                  options.delta, span)
+                    : fmt::format("RPE needs poses at least the delta of {:g} frames apart; the estimate has {} poses",
+                                  options.delta, est_stamps.size()));
+  }
   const std::vector<std::pair<std::size_t, std::size_t>> pairs = EstimatePairsDeltaApart(est_stamps, options);
 
   // Both ends of a pair need a ground-truth pose within twice the median interval.
@@ -352,10 +367,12 @@ TrajectoryEvaluation EvaluateTrajectoryFiles(const std::filesystem::path& ground
   } catch (const Error& e) {
     throw Error(origin + ": ATE: " + e.what());
   }
+  // The ATE needs pose pairs at one stamp, the RPE pairs delta apart: a trajectory
+  // shorter than the delta has the one and not the other.
   try {
     evaluation.rpe = ComputeRpe(ground_truth, estimate, rpe_options);
   } catch (const Error& e) {
-    throw Error(origin + ": RPE: " + e.what());
+    evaluation.rpe_missing_reason = e.what();
   }
   return evaluation;
 }

@@ -13,6 +13,7 @@
 
 #include <cstddef>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -78,10 +79,15 @@ struct AteResult {
   ErrorStatistics translation_m;
 };
 
+// Positions further than this from the origin are refused (10,000 km): no trajectory on
+// Earth comes near, and squared distances of far larger ones overflow to inf and NaN.
+constexpr double kMaxPositionM = 1e7;
+
 // Absolute trajectory error as evaluate_ate.py: associate positions by stamp, align the
 // estimate to the ground truth (unless options.align is false), and summarise the
-// distances. Both trajectories must have strictly increasing stamps. Throws
-// segslam::Error when no stamps associate, or too few for the alignment (3; 1 without).
+// distances. Both trajectories must have strictly increasing stamps and positions within
+// kMaxPositionM of the origin. Throws segslam::Error when no stamps associate, or too few
+// for the alignment (3; 1 without).
 AteResult ComputeAte(const std::vector<StampedPose>& ground_truth,
                      const std::vector<StampedPose>& estimate, const AteOptions& options = {});
 
@@ -118,18 +124,22 @@ struct RpeResult {
 // is the last pose; both matched to the closest ground-truth stamps, skipped when either
 // is further than twice the median ground-truth interval; error
 // E = (est_i^-1 est_j) (gt_i^-1 gt_j)^-1, summarised as |translation(E)| and the angle of
-// rotation(E). Both trajectories must have strictly increasing stamps. Throws
+// rotation(E). Both trajectories must have strictly increasing stamps and positions within
+// kMaxPositionM of the origin. Throws
 // segslam::Error when the stamps barely overlap or fewer than 2 pairs remain.
 RpeResult ComputeRpe(const std::vector<StampedPose>& ground_truth,
                      const std::vector<StampedPose>& estimate, const RpeOptions& options = {});
 
 struct TrajectoryEvaluation {
   AteResult ate;
-  RpeResult rpe;
+  // Absent where the trajectories give too few pose pairs delta apart (a sequence shorter
+  // than the delta, say), with the reason.
+  std::optional<RpeResult> rpe;
+  std::string rpe_missing_reason;
 };
 
-// Reads both TUM trajectory files and computes ATE and RPE. Errors about the pair (no
-// overlap, too few pairs) name both files.
+// Reads both TUM trajectory files and computes ATE and, where it can, RPE. Errors about
+// the pair (no overlap, too few pairs for the ATE) name both files.
 TrajectoryEvaluation EvaluateTrajectoryFiles(const std::filesystem::path& ground_truth_file,
                                              const std::filesystem::path& estimate_file,
                                              const AteOptions& ate_options,

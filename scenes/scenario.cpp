@@ -5,7 +5,9 @@
 
 #include "core/camera.h"
 #include "core/error.h"
+#include "core/input_file.h"
 #include "core/lens_distortion.h"
+#include "core/yaml_file.h"
 #include "scenes/city_layout.h"
 
 #include <algorithm>
@@ -62,7 +64,7 @@ Error KeyError(const std::string& origin, const std::string& key, const std::str
 }
 
 std::string ScalarText(const YAML::Node& node) {
-  if (node.IsScalar()) return node.Scalar();
+  if (node.IsScalar()) return PrintableText(node.Scalar());
   if (node.IsSequence()) return "a list";
   if (node.IsMap()) return "a mapping";
   return "nothing";
@@ -76,10 +78,10 @@ double ReadNumber(const YAML::Node& node, const std::string& origin, const std::
   try {
     v = node.as<double>();
   } catch (const YAML::Exception&) {
-    throw KeyError(origin, key, "expected a number (got '" + node.Scalar() + "')");
+    throw KeyError(origin, key, "expected a number (got '" + PrintableText(node.Scalar()) + "')");
   }
   if (!std::isfinite(v)) {
-    throw KeyError(origin, key, "expected a finite number (got '" + node.Scalar() + "')");
+    throw KeyError(origin, key, "expected a finite number (got '" + PrintableText(node.Scalar()) + "')");
   }
   return v;
 }
@@ -208,7 +210,7 @@ class FieldTable {
               try {
                 x = n.as<long long>();
               } catch (const YAML::Exception&) {
-                throw KeyError(origin, key, "expected an integer (got '" + n.Scalar() + "')");
+                throw KeyError(origin, key, "expected an integer (got '" + PrintableText(n.Scalar()) + "')");
               }
               if (x < lo || x > hi) {
                 const std::string range =
@@ -234,7 +236,7 @@ class FieldTable {
               try {
                 *v = n.as<std::uint64_t>();
               } catch (const YAML::Exception&) {
-                throw KeyError(origin, key, "expected an integer (got '" + n.Scalar() + "')");
+                throw KeyError(origin, key, "expected an integer (got '" + PrintableText(n.Scalar()) + "')");
               }
             },
             [=] { return YAML::Node(*v); }};
@@ -274,7 +276,7 @@ class FieldTable {
               }
               std::string list;
               for (const std::string& c : choices) list += (list.empty() ? "" : ", ") + c;
-              throw KeyError(origin, key, "must be one of " + list + " (got '" + x + "')");
+              throw KeyError(origin, key, "must be one of " + list + " (got '" + PrintableText(x) + "')");
             },
             [=] { return YAML::Node(*v); }};
   }
@@ -392,22 +394,17 @@ void ApplyKindDefaults(const std::string& kind, CameraSpec* c, SensorSpec* senso
   }
 }
 
-std::string KeyText(const YAML::Node& key) { return key.IsScalar() ? key.Scalar() : "?"; }
+std::string KeyText(const YAML::Node& key) { return key.IsScalar() ? PrintableText(key.Scalar()) : "?"; }
 
-// The generator bends each render through the lens and a run takes the bend out again, so
-// the lens's radial distortion must keep growing over the whole image: out to the image's
-// corners in the pinhole image, and until it reaches them in the stored one.
-void CheckLensCoversTheImage(const CameraSpec& camera, const std::string& origin) {
-  if (camera.distortion.IsZero()) return;
+// The camera the generator renders passes the check of every camera a run or eval reads
+// (SequenceCamera::IsValid's parts): a sensible field of view along both axes, and a lens
+// whose bend keeps growing over the whole image (the generator bends each render through
+// the lens and a run takes the bend out again).
+void CheckCamera(const CameraSpec& camera, const std::string& origin) {
   const PinholeCamera pinhole = PinholeCamera::FromVerticalFov(camera.width, camera.height, camera.fovy_deg);
-  const double corner = CornerRadius(pinhole);
-  const double growing = camera.distortion.GrowingRadius(4 * corner);
-  if (growing < corner || camera.distortion.DistortRadius(growing) < corner) {
-    throw KeyError(origin, "camera.distortion",
-                   "folds the image: its radial distortion stops growing at normalised radius " + Num(growing) +
-                       ", and the image's corners lie at " + Num(corner) +
-                       " (a polynomial fitted to a narrower field of view?)");
-  }
+  std::string problem;
+  if (!pinhole.IsValid(&problem)) throw KeyError(origin, "camera", problem);
+  if (!LensCoversImage(camera.distortion, pinhole, &problem)) throw KeyError(origin, "camera.distortion", problem);
 }
 
 // The pass-2 camera of a city rides on the camera car as pass 1's does (city_layout.h),
@@ -454,13 +451,8 @@ Scenario ParseScenario(const std::string& yaml_text, const std::string& origin) 
   s.source_file = origin;
   s.text = yaml_text;
 
-  // Parse the YAML itself; syntax errors carry a line number.
-  YAML::Node root;
-  try {
-    root = YAML::Load(yaml_text);
-  } catch (const YAML::ParserException& e) {
-    throw Error(origin + ": line " + std::to_string(e.mark.line + 1) + ": " + e.msg);
-  }
+  // Parse the YAML itself; syntax errors and repeated keys carry line numbers.
+  const YAML::Node root = LoadYamlText(yaml_text, origin);
   if (!root.IsMap()) {
     throw Error(origin + ": expected a mapping of keys at the top level");
   }
@@ -484,18 +476,18 @@ Scenario ParseScenario(const std::string& yaml_text, const std::string& origin) 
       for (const auto& sub : top.second) {
         const std::string dotted = key + "." + KeyText(sub.first);
         const Field* f = table.Find(dotted);
-        if (f == nullptr) throw Error(origin + ": unknown key '" + dotted + "'");
+        if (f == nullptr) throw Error(origin + ": unknown key '" + PrintableText(dotted) + "'");
         f->read(sub.second);
       }
     } else {
       const Field* f = table.Find(key);
-      if (f == nullptr) throw Error(origin + ": unknown key '" + key + "'");
+      if (f == nullptr) throw Error(origin + ": unknown key '" + PrintableText(key) + "'");
       f->read(top.second);
     }
   }
 
   // Checks across keys.
-  CheckLensCoversTheImage(s.camera, origin);
+  CheckCamera(s.camera, origin);
   if (s.camera.far_m <= s.camera.near_m) {
     throw KeyError(origin, "camera.far_m", "must be > camera.near_m (got " + Num(s.camera.far_m) + ")");
   }
@@ -537,12 +529,7 @@ Scenario ParseScenario(const std::string& yaml_text, const std::string& origin) 
 }
 
 Scenario LoadScenario(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw FileError(file, "cannot open scenario file");
-  std::ostringstream bytes;
-  bytes << in.rdbuf();
-  if (in.bad()) throw FileError(file, "cannot read scenario file");
-  return ParseScenario(bytes.str(), file.string());
+  return ParseScenario(ReadFileText(file), file.string());
 }
 
 YAML::Node ScenarioToYaml(const Scenario& scenario) {

@@ -126,6 +126,12 @@ CocoDetections CocoDetections::Read(const fs::path& file, const TumSequence& seq
   if (!json.is_array() && !dataset_file) {
     throw Error(origin + ": expected a COCO results list, or a COCO dataset object with \"annotations\"");
   }
+  // A network that ran finds something somewhere; an empty list is a failed or wrong export,
+  // and its folder of empty masks would pass for "nothing in view" in every frame.
+  if (const nlohmann::json& listed = dataset_file ? json.at("annotations") : json; listed.is_array() && listed.empty()) {
+    throw Error(origin + (dataset_file ? ": \"annotations\" is an empty list" : ": an empty results list") +
+                ": no detection to import (did the network run on this sequence's images?)");
+  }
   std::optional<ImageList> images;
   if (!options.images_file.empty()) {
     const nlohmann::json list = ReadJsonFile(options.images_file);

@@ -65,8 +65,8 @@ class CocoDetections {
   // and what is wrong: unreadable or malformed JSON, a detection without image_id,
   // category_id or segmentation, an integer image_id without an image list, an image_id
   // missing from the list, an unknown category, a score outside [0, 1], more than 65535
-  // kept detections on one frame, or no detection at all on the sequence's frames (the
-  // file is for other images).
+  // kept detections on one frame, no detection at all (an empty list), or none on the
+  // sequence's frames (the file is for other images).
   static CocoDetections Read(const std::filesystem::path& file, const TumSequence& sequence,
                              const CocoImportOptions& options);
 

@@ -9,6 +9,7 @@
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
+#include "core/output_folders.h"
 
 namespace segslam::seg {
 namespace {
@@ -155,7 +156,7 @@ void WriteMaskFolderRecord(const fs::path& dir, const TumSequence& sequence) {
   const nlohmann::json record = {{"sequence", sequence.dir().string()},
                                  {"first_frame", sequence.entries().front().rgb_file},
                                  {"first_frame_sha256", sequence.FirstFrameSha256()}};
-  WriteFileAtomically(dir / "segslam_sequence.json", record.dump(1) + "\n");
+  WriteFileAtomically(dir / kMaskFolderRecordFile, record.dump(1) + "\n");
 }
 
 namespace {
@@ -163,7 +164,7 @@ namespace {
 // A record for another sequence's frames (same first stem, other image) is refused; one
 // for a sequence whose first frame this one lacks says nothing, and is let be.
 void CheckMaskFolderRecord(const fs::path& dir, const TumSequence& sequence) {
-  const fs::path file = dir / "segslam_sequence.json";
+  const fs::path file = dir / kMaskFolderRecordFile;
   if (!fs::exists(file) || sequence.size() == 0) return;
   const nlohmann::json record = ReadJsonFile(file);
   const auto text = [&](const char* key) {

@@ -7,6 +7,7 @@
 #include "core/instances.h"
 #include "core/lens_distortion.h"
 #include "core/manifest.h"
+#include "core/output_folders.h"
 #include "core/pose.h"
 #include "core/tracks.h"
 #include "core/tum_dataset.h"
@@ -247,7 +248,8 @@ class DatasetGeneration {
         progress_(progress),
         world_(scenes::BuildWorld(scenario)),
         target_(out_dir),
-        staging_(options.write_files ? std::optional<StagingDirectory>(std::in_place, out_dir, options.overwrite)
+        staging_(options.write_files ? std::optional<StagingDirectory>(std::in_place, out_dir, options.overwrite,
+                                                                           ForeignContentOfDataset, "dataset")
                                      : std::nullopt),
         renderer_(world_, options.backend, options.render),
         sensor_(scenario.sensor, renderer_.intrinsics(), KindDefaultMaxDepth(world_), world_.camera.fps),

@@ -29,7 +29,9 @@ struct GenerateOptions {
   RenderOptions render;                    // renderer switches (shadows...)
   int max_frames_per_pass = 0;             // 0 = all frames the scenario defines
   int encode_threads = 0;                  // threads for noise + PNG encoding; 0 = cores
-  bool overwrite = false;                  // replace an existing output directory
+  // Replace an existing output directory: only a dataset segslam generated (its manifest
+  // lists every file; core/output_folders.h), or an empty folder; any other is refused.
+  bool overwrite = false;
   // With overwrite: keep a complete dataset (one with manifest.json) that appeared there
   // while this one was generated, and drop this one. Two processes filling one cache
   // entry make the same bytes; replacing would pull the first's dataset from under it.
@@ -68,9 +70,11 @@ struct GenerateSummary {
 };
 
 // Generates the dataset of `scenario` into `out_dir`. Throws segslam::Error on bad
-// input, unwritable output, an unavailable GL back-end, or cancellation; in every such
-// case nothing is left at `out_dir` (an existing directory there is kept unless the
-// run completes with overwrite=true).
+// input, unwritable output, an unavailable GL back-end, cancellation, or an `out_dir`
+// that is a file or (with overwrite) a folder that is no dataset; in every such case
+// nothing is left at `out_dir` (an existing directory there is kept unless the run
+// completes with overwrite=true). Staging folders of killed generations to the same
+// `out_dir` on this host are removed (core/atomic_file.h).
 GenerateSummary GenerateDataset(const scenes::Scenario& scenario,
                                 const std::filesystem::path& out_dir,
                                 const GenerateOptions& options,

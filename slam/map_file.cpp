@@ -14,6 +14,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/input_file.h"
 
 namespace segslam::slam {
 namespace {
@@ -24,6 +25,9 @@ constexpr char kMagic[12] = {'S', 'E', 'G', 'S', 'L', 'A', 'M', '-', 'M', 'A', '
 constexpr std::size_t kMagicBytes = sizeof(kMagic);
 constexpr std::size_t kHeaderBytes = kMagicBytes + 4 + 8;  // magic, version, payload size
 constexpr std::size_t kChecksumBytes = 32;                 // SHA-256
+// The largest payload a reader accepts: 64 GiB, some 600 million map points, far above any
+// map a run builds (a few MB); a larger size field is a damaged header.
+constexpr std::uint64_t kMaxPayloadBytes = std::uint64_t{64} << 30;
 
 // Payload layout of version 1, in order:
 //   camera:      i32 width, i32 height, f64 fx, fy, cx, cy
@@ -282,20 +286,6 @@ LongTermMapData DecodePayload(const fs::path& file, const unsigned char* data,
   return map;
 }
 
-std::string ReadWholeFile(const fs::path& path) {
-  std::error_code error;
-  const bool exists = fs::exists(path, error);
-  if (error) throw FileError(path, "cannot access: " + error.message());
-  if (!exists) throw FileError(path, "no such file");
-  if (fs::is_directory(path, error)) throw FileError(path, "is a directory, not a map file");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw FileError(path, std::string("cannot open: ") + std::strerror(errno));
-  std::ostringstream bytes;
-  bytes << in.rdbuf();
-  if (in.bad()) throw FileError(path, std::string("cannot read: ") + std::strerror(errno));
-  return bytes.str();
-}
-
 std::uint64_t LittleEndianAt(const std::string& bytes, std::size_t offset, int size) {
   std::uint64_t v = 0;
   for (int i = 0; i < size; ++i) {
@@ -335,7 +325,7 @@ void SaveLongTermMap(const fs::path& path, const LongTermMapData& map) {
 }
 
 LongTermMapData LoadLongTermMap(const fs::path& path) {
-  const std::string bytes = ReadWholeFile(path);
+  const std::string bytes = ReadFileText(path);
 
   // A file shorter than the magic that matches as far as it goes is a cut-off map; one that
   // does not match is something else.
@@ -355,17 +345,17 @@ LongTermMapData LoadLongTermMap(const fs::path& path) {
                                       version, kMapFormatVersion));
   }
   const std::uint64_t payload_size = LittleEndianAt(bytes, kMagicBytes + 4, 8);
+  // A size no map comes near is a damaged header, not a file cut short (which keeps its
+  // header's true size); compared before adding to payload_size, which may be near 2^64.
+  if (payload_size > kMaxPayloadBytes) {
+    throw FileError(path, fmt::format("corrupt: the header gives {} bytes of map data, more than any map holds "
+                                      "({} at most); the file has {} bytes",
+                                      payload_size, kMaxPayloadBytes, bytes.size()));
+  }
   const std::size_t available = bytes.size() - kHeaderBytes;
-  // Compared without adding to payload_size, which a damaged header may set near 2^64.
   if (available < kChecksumBytes || payload_size > available - kChecksumBytes) {
-    constexpr std::uint64_t kLargestSummablePayload =
-        std::numeric_limits<std::uint64_t>::max() - kHeaderBytes - kChecksumBytes;
-    const std::string expected_size =
-        payload_size <= kLargestSummablePayload
-            ? std::to_string(kHeaderBytes + payload_size + kChecksumBytes)
-            : "more than 2^64";
     throw FileError(path, fmt::format("truncated: expected {} bytes, the file has {}",
-                                      expected_size, bytes.size()));
+                                      kHeaderBytes + payload_size + kChecksumBytes, bytes.size()));
   }
   const std::size_t expected_size = kHeaderBytes + payload_size + kChecksumBytes;
   if (bytes.size() != expected_size) {

@@ -73,5 +73,31 @@ TEST(PinholeCamera, IsValid) {
   EXPECT_FALSE((PinholeCamera{640, 480, 500, 500, NAN, 240}.IsValid(nullptr)));
 }
 
+// Finite and positive is not enough: a focal length of 1e-9 px "localized" every frame of
+// a run with an ATE of 4e8 m. The limits hold for a real Kinect and the generator's cameras.
+TEST(PinholeCamera, IsValidRefusesAbsurdFocalLengthsAndPrincipalPoints) {
+  std::string error;
+  EXPECT_TRUE((PinholeCamera{640, 480, 517.3, 516.5, 318.6, 255.3}.IsValid(&error))) << error;  // TUM fr1
+  EXPECT_TRUE(PinholeCamera::FromVerticalFov(640, 480, 160).IsValid(&error)) << error;
+  EXPECT_TRUE(PinholeCamera::FromVerticalFov(640, 480, 10).IsValid(&error)) << error;
+
+  EXPECT_FALSE((PinholeCamera{640, 480, 1e-9, 525, 319.5, 239.5}.IsValid(&error)));
+  EXPECT_NE(error.find("fx 1e-09 px gives a horizontal field of view of 180 deg across 640 px"), std::string::npos)
+      << error;
+  EXPECT_FALSE((PinholeCamera{640, 480, 525, 1e7, 319.5, 239.5}.IsValid(&error)));
+  EXPECT_NE(error.find("fy 1e+07 px gives a vertical field of view"), std::string::npos) << error;
+  EXPECT_FALSE((PinholeCamera{640, 480, 525, 200, 319.5, 239.5}.IsValid(&error)));
+  EXPECT_NE(error.find("differ more than 2 times"), std::string::npos) << error;
+  EXPECT_FALSE((PinholeCamera{640, 480, 525, 525, 99999, 239.5}.IsValid(&error)));
+  EXPECT_NE(error.find("principal point cx 99999 lies outside the image (-0.5 to 639.5 for 640 px)"),
+            std::string::npos)
+      << error;
+  EXPECT_FALSE((PinholeCamera{640, 480, 525, 525, 319.5, -1}.IsValid(&error)));
+  EXPECT_NE(error.find("principal point cy -1"), std::string::npos) << error;
+  EXPECT_TRUE((PinholeCamera{640, 480, 525, 525, -0.5, 479.5}.IsValid(&error))) << error;  // on the edge
+  EXPECT_FALSE((PinholeCamera{100000, 480, 525, 525, 319.5, 239.5}.IsValid(&error)));
+  EXPECT_NE(error.find("1 to 16384 pixels a side"), std::string::npos) << error;
+}
+
 }  // namespace
 }  // namespace segslam

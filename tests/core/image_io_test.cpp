@@ -1,9 +1,12 @@
 #include "core/image_io.h"
 
 #include <cmath>
+#include <cstdint>
 #include <fstream>
 #include <limits>
+#include <optional>
 #include <random>
+#include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -126,6 +129,73 @@ TEST_F(ImageIoTest, MissingAndCorruptFiles) {
 TEST(CvTypeName, Names) {
   EXPECT_EQ(CvTypeName(CV_16UC1), "CV_16UC1");
   EXPECT_EQ(CvTypeName(CV_32FC3), "CV_32FC3");
+}
+
+}  // namespace
+}  // namespace segslam
+
+namespace segslam {
+namespace {
+
+// PNG's CRC-32 (ISO 3309) of `bytes`, for a header patched by hand.
+std::uint32_t PngCrc(const unsigned char* bytes, std::size_t size) {
+  std::uint32_t crc = 0xffffffffu;
+  for (std::size_t i = 0; i < size; ++i) {
+    crc ^= bytes[i];
+    for (int bit = 0; bit < 8; ++bit) crc = (crc >> 1) ^ (0xedb88320u & (0u - (crc & 1u)));
+  }
+  return crc ^ 0xffffffffu;
+}
+
+// A 4x4 16-bit PNG whose header claims `width` x `height`: its pixel data cannot fill
+// that, so a decoder run on it fails; only a check of the header gives a size.
+std::string PngClaimingSize(std::uint32_t width, std::uint32_t height) {
+  const std::vector<unsigned char> real = EncodeInstanceMaskPng(cv::Mat(4, 4, CV_16UC1, cv::Scalar(7)));
+  std::vector<unsigned char> png = real;
+  // Signature (8), IHDR length (4), "IHDR" (4), then width and height, big-endian.
+  constexpr std::size_t kIhdrType = 12, kWidth = 16, kIhdrCrc = 29;
+  for (int i = 0; i < 4; ++i) {
+    png[kWidth + i] = static_cast<unsigned char>(width >> (24 - 8 * i));
+    png[kWidth + 4 + i] = static_cast<unsigned char>(height >> (24 - 8 * i));
+  }
+  const std::uint32_t crc = PngCrc(&png[kIhdrType], kIhdrCrc - kIhdrType);
+  for (int i = 0; i < 4; ++i) png[kIhdrCrc + i] = static_cast<unsigned char>(crc >> (24 - 8 * i));
+  return std::string(png.begin(), png.end());
+}
+
+TEST_F(ImageIoTest, PngHeaderIsReadWithoutDecoding) {
+  const auto path = dir() / "huge.png";
+  std::ofstream(path, std::ios::binary) << PngClaimingSize(20000, 20000);
+  const std::optional<PngHeader> header = ReadPngHeader(path);
+  ASSERT_TRUE(header.has_value());
+  EXPECT_EQ(header->width, 20000);
+  EXPECT_EQ(header->height, 20000);
+  EXPECT_EQ(header->bit_depth, 16);
+  EXPECT_EQ(header->channels, 1);
+  // Not a PNG: no header to read, the decoder decides.
+  std::ofstream(dir() / "text.png") << "not an image";
+  EXPECT_FALSE(ReadPngHeader(dir() / "text.png").has_value());
+}
+
+// A small file claiming a huge image is refused from its header: the message gives the
+// claimed size, which the decoder, failing on the missing pixels, could not have given.
+TEST_F(ImageIoTest, OversizedPngIsRefusedBeforeDecoding) {
+  const auto path = dir() / "huge.png";
+  std::ofstream(path, std::ios::binary) << PngClaimingSize(20000, 20000);
+  EXPECT_NE(ErrorMessage([&] { ReadDepthImage(path, 5000, cv::Size(640, 480)); })
+                .find("huge.png: image is 20000x20000, camera expects 640x480"),
+            std::string::npos);
+  EXPECT_NE(ErrorMessage([&] { ReadInstanceMask(path, cv::Size(640, 480)); })
+                .find("huge.png: mask is 20000x20000, the sequence's images are 640x480"),
+            std::string::npos);
+  // Without an expected size, the largest image any reader takes.
+  EXPECT_NE(ErrorMessage([&] { ReadDepthImage(path, 5000); }).find("image is 20000x20000, larger than any camera image"),
+            std::string::npos);
+  // The type too: 16 bits are no colour image.
+  std::ofstream(dir() / "small.png", std::ios::binary) << PngClaimingSize(640, 480);
+  EXPECT_NE(ErrorMessage([&] { ReadColorImage(dir() / "small.png", cv::Size(640, 480)); })
+                .find("colour image must be 8-bit, found CV_16UC1"),
+            std::string::npos);
 }
 
 }  // namespace

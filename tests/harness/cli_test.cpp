@@ -10,6 +10,8 @@
 #include <iterator>
 #include <regex>
 #include <string>
+#include <utility>
+#include <vector>
 #include <csignal>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -107,6 +109,72 @@ TEST_F(CliBadInputTest, OutOfRangeValueIsNamed) {
 
 TEST_F(CliBadInputTest, MissingScenarioFile) {
   ExpectGenerateFails(dir_ / "nowhere.yaml", {"nowhere.yaml"});
+}
+
+// A number out of range names its option and the allowed range in words (CLI11's own
+// check printed a 309-digit maximum), and exits 1 as every other error does.
+TEST_F(CliBadInputTest, NumberOutOfRangeSaysTheRangeInWordsAndExitsOne) {
+  const std::string out = " --out " + (dir_ / "out").string();
+  const std::pair<std::string, std::string> cases[] = {
+      {std::string("generate ") + kSmallOffice + out + " --frames -3",
+       "--frames: must be a whole number from 0 to 1000000 (0 = all), got -3"},
+      {std::string("run ") + dir_.string() + out + " --frames 99999999999999",
+       "--frames: must be a whole number from 0 to 1000000 (0 = all), got 99999999999999"},
+      {std::string("scenario run ") + kSmallOffice + out + " --repeats 0",
+       "--repeats: must be a whole number from 1 to 1000, got 0"},
+      {std::string("scenario run ") + kSmallOffice + out + " --jobs 0",
+       "--jobs: must be a whole number from 1 to 1024, got 0"},
+      {std::string("eval-traj a.txt b.txt --rpe-delta 0"), "--rpe-delta: must be a number above 0 and at most 1e+06, got 0"},
+  };
+  for (const auto& [arguments, message] : cases) {
+    SCOPED_TRACE(arguments);
+    const CommandResult result = RunSegslam(arguments);
+    EXPECT_EQ(result.exit_code, 1);
+    EXPECT_EQ(LineCount(result.stderr_text), 1) << result.stderr_text;
+    EXPECT_NE(result.stderr_text.find("segslam: error: " + message), std::string::npos) << result.stderr_text;
+  }
+  EXPECT_FALSE(fs::exists(dir_ / "out"));
+}
+
+// Every exit code is listed in the help of segslam and of each subcommand.
+TEST_F(CliBadInputTest, HelpListsTheExitCodes) {
+  for (const std::string command : {"", "run ", "scenario run "}) {
+    const fs::path help = dir_ / "help.txt";
+    ASSERT_EQ(std::system((std::string(SEGSLAM_BINARY) + " " + command + "--help >" + help.string()).c_str()), 0);
+    std::ifstream in(help);
+    const std::string text((std::istreambuf_iterator<char>(in)), {});
+    for (const char* code : {"Exit codes: 0 done; 1 an error", "2 an expectation failed", "3 an internal error",
+                             "130 interrupted"}) {
+      EXPECT_NE(text.find(code), std::string::npos) << command << "--help lacks '" << code << "':\n" << text;
+    }
+  }
+}
+
+// A folder given where a file is expected is named, with exit code 1 (it was an internal
+// error, exit 3, without the path).
+TEST_F(CliBadInputTest, FolderWhereAFileIsExpectedIsNamed) {
+  const fs::path folder = dir_ / "folder";
+  fs::create_directories(folder);
+  const CommandResult result = RunSegslam("eval-traj " + folder.string() + " " + folder.string());
+  EXPECT_EQ(result.exit_code, 1);
+  EXPECT_NE(result.stderr_text.find(folder.string() + ": is a directory, expected a file"), std::string::npos)
+      << result.stderr_text;
+  const CommandResult scenario = RunSegslam("generate " + folder.string() + " --out " + (dir_ / "out").string());
+  EXPECT_EQ(scenario.exit_code, 1);
+  EXPECT_NE(scenario.stderr_text.find(folder.string() + ": is a directory, expected a file"), std::string::npos)
+      << scenario.stderr_text;
+}
+
+// Translations near 1e200 m printed inf and -nan with exit code 0.
+TEST_F(CliBadInputTest, EvalTrajRefusesPositionsBeyondEarth) {
+  const fs::path ground_truth = dir_ / "groundtruth.txt", estimate = dir_ / "estimate.txt";
+  std::ofstream(ground_truth) << "1.0 0 0 0 0 0 0 1\n1.5 1 0 0 0 0 0 1\n2.0 2 0 0 0 0 0 1\n2.5 3 1 0 0 0 0 1\n";
+  std::ofstream(estimate) << "1.0 1e200 0 0 0 0 0 1\n1.5 1 0 0 0 0 0 1\n2.0 2 0 0 0 0 0 1\n2.5 3 1 0 0 0 0 1\n";
+  const CommandResult result = RunSegslam("eval-traj " + ground_truth.string() + " " + estimate.string());
+  EXPECT_EQ(result.exit_code, 1);
+  EXPECT_NE(result.stderr_text.find("estimate pose 0 (stamp 1.000000) lies 1e+200 m from the origin"),
+            std::string::npos)
+      << result.stderr_text;
 }
 
 TEST_F(CliBadInputTest, UnwritableOutputPath) {
@@ -262,8 +330,73 @@ TEST_F(CliRunBadInputTest, StrengthWithoutASimulatedSegmenterIsRefused) {
   const CommandResult out_of_range =
       RunSegslam("run " + sequence.string() + " --mode mutual --segmenter fcis-like --strength 12 -q");
   EXPECT_NE(out_of_range.exit_code, 0);
-  EXPECT_NE(out_of_range.stderr_text.find("--strength: Value 12 not in range"), std::string::npos)
+  EXPECT_NE(out_of_range.stderr_text.find("--strength: must be a number from 0 to 10, got 12"), std::string::npos)
       << out_of_range.stderr_text;
+}
+
+// run --camera gets the check generate's camera gets: a focal length of 1e-9 px ran to
+// "100 % localized" and an ATE of 4e8 m, a principal point far outside the image and a
+// lens that folds the image were taken.
+TEST_F(CliRunBadInputTest, CameraGenerateWouldRefuseIsRefused) {
+  const fs::path sequence = GenerateTinySequence();
+  const std::string intrinsics = "width: 320\nheight: 240\nfy: 250\ncy: 119.5\ndepth_factor: 5000\n";
+  const std::pair<std::string, std::string> cameras[] = {
+      {"fx: 1e-9\ncx: 159.5\n", "fx 1e-09 px gives a horizontal field of view of 180 deg"},
+      {"fx: 250\ncx: 99999\n", "principal point cx 99999 lies outside the image"},
+      {"fx: 250\ncx: 159.5\nk1: 50\nk2: -90\n", "the lens (k1 50, k2 -90, k3 0) folds the image"},
+  };
+  for (const auto& [camera, fragment] : cameras) {
+    SCOPED_TRACE(camera);
+    std::ofstream(dir_ / "camera.yaml") << intrinsics << camera;
+    ExpectRunFails(sequence.string() + " --mode plain --camera " + (dir_ / "camera.yaml").string(),
+                   (dir_ / "camera.yaml").string() + ": invalid camera: " + fragment);
+  }
+  ExpectRunFails(sequence.string() + " --mode plain --camera " + dir_.string(),
+                 dir_.string() + ": is a directory, expected a file");
+}
+
+// The README promises that an empty results list is an error leaving no folder; it wrote
+// a folder of empty masks.
+TEST_F(CliRunBadInputTest, MasksImportOfAnEmptyListFailsAndLeavesNoFolder) {
+  const fs::path sequence = GenerateTinySequence();
+  std::ofstream(dir_ / "empty.json") << "[]\n";
+  const fs::path out = dir_ / "masks";
+  const CommandResult result =
+      RunSegslam("masks import " + sequence.string() + " " + (dir_ / "empty.json").string() + " -q --out " + out.string());
+  EXPECT_EQ(result.exit_code, 1);
+  EXPECT_NE(result.stderr_text.find("empty.json: an empty results list"), std::string::npos) << result.stderr_text;
+  EXPECT_FALSE(fs::exists(out));
+  // A folder for the detections or the image list is named too.
+  const CommandResult folder =
+      RunSegslam("masks import " + sequence.string() + " " + dir_.string() + " -q --out " + out.string());
+  EXPECT_NE(folder.stderr_text.find(dir_.string() + ": is a directory, expected a file"), std::string::npos)
+      << folder.stderr_text;
+  std::ofstream(dir_ / "one.json") << "[{\"image_id\": 1}]\n";
+  const CommandResult images = RunSegslam("masks import " + sequence.string() + " " + (dir_ / "one.json").string() +
+                                          " --images " + dir_.string() + " -q --out " + out.string());
+  EXPECT_NE(images.stderr_text.find(dir_.string() + ": is a directory, expected a file"), std::string::npos)
+      << images.stderr_text;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+// eval checks frames.jsonl against the trajectory written with it: cut to one line of
+// three, it reported 1 frame, 100 % localized.
+TEST_F(CliRunBadInputTest, EvalRefusesAFrameLogCutShort) {
+  const fs::path sequence = GenerateTinySequence();
+  const fs::path run = dir_ / "run";
+  ASSERT_EQ(RunSegslam("run " + sequence.string() + " --mode plain -q --out " + run.string()).exit_code, 0);
+  std::ifstream in(run / "frames.jsonl");
+  std::string first_line;
+  std::getline(in, first_line);
+  in.close();
+  std::ofstream(run / "frames.jsonl") << first_line << "\n";
+  const CommandResult result = RunSegslam("eval " + run.string() + " --dataset " + sequence.string());
+  EXPECT_EQ(result.exit_code, 1);
+  EXPECT_EQ(LineCount(result.stderr_text), 1) << result.stderr_text;
+  EXPECT_NE(result.stderr_text.find((run / "frames.jsonl").string() + ": 1 frame(s), but " +
+                                    (run / "trajectory.txt").string() + " says the run read 3"),
+            std::string::npos)
+      << result.stderr_text;
 }
 
 // --refiner tunes the mutual loop's refinement: where no loop runs it would do nothing.

@@ -419,6 +419,102 @@ TEST_F(RunEvaluationTest, SegmenterInstancesAreRelatedToGroundTruthByTheirMasks)
   EXPECT_NE(evaluation.passes[0].moving_missing_reason.find("no ground-truth identity"), std::string::npos);
 }
 
+// frames.jsonl is checked against the trajectory and the sequence before it is counted: a
+// log cut short reported "5 frames, 100 % localized", a repeated line counted twice, an
+// unknown status counted as localized.
+class FrameLogTest : public RunEvaluationTest {
+ protected:
+  void SetUp() override {
+    RunEvaluationTest::SetUp();
+    WriteSequence(dir_ / "sequence", GroundTruth(0));
+    WriteRun(dir_ / "run", GroundTruth(0), "");
+    std::ifstream in(dir_ / "run" / "frames.jsonl");
+    for (std::string line; std::getline(in, line);) lines_.push_back(line);
+  }
+  // The error of EvaluateRun with frames.jsonl made of `lines`, or "" if none.
+  std::string EvaluationErrorWith(const std::vector<std::string>& lines) {
+    std::ofstream out(dir_ / "run" / "frames.jsonl");
+    for (const std::string& line : lines) out << line << "\n";
+    out.close();
+    try {
+      EvaluateRun(dir_ / "run", dir_ / "sequence");
+    } catch (const Error& e) {
+      return e.what();
+    }
+    return "";
+  }
+  std::vector<std::string> lines_;
+};
+
+TEST_F(FrameLogTest, CompleteLogIsScored) { EXPECT_EQ(EvaluationErrorWith(lines_), ""); }
+
+TEST_F(FrameLogTest, LogCutShortIsRefused) {
+  const std::string error = EvaluationErrorWith({lines_.begin(), lines_.begin() + 5});
+  EXPECT_NE(error.find((dir_ / "run" / "trajectory.txt").string() + ": the pose at stamp 100.500000 has no tracked "
+                       "frame in " + (dir_ / "run" / "frames.jsonl").string() + " (5 frame(s))"),
+            std::string::npos)
+      << error;
+}
+
+TEST_F(FrameLogTest, RepeatedOrMissingLineIsRefused) {
+  std::vector<std::string> repeated = lines_;
+  repeated.insert(repeated.begin() + 3, lines_[2]);
+  const std::string where = (dir_ / "run" / "frames.jsonl").string() + ":4: ";
+  EXPECT_NE(EvaluationErrorWith(repeated).find(where + "frame 2 where frame 3 was expected"), std::string::npos)
+      << EvaluationErrorWith(repeated);
+  std::vector<std::string> missing = lines_;
+  missing.erase(missing.begin() + 3);
+  EXPECT_NE(EvaluationErrorWith(missing).find(where + "frame 4 where frame 3 was expected"), std::string::npos)
+      << EvaluationErrorWith(missing);
+}
+
+TEST_F(FrameLogTest, UnknownStatusIsRefused) {
+  std::vector<std::string> lines = lines_;
+  lines[6].replace(lines[6].find("\"tracking\""), 10, "\"flying\"");
+  const std::string error = EvaluationErrorWith(lines);
+  EXPECT_NE(error.find((dir_ / "run" / "frames.jsonl").string() +
+                       ":7: unknown status 'flying' (expected tracking, relocalized or lost)"),
+            std::string::npos)
+      << error;
+}
+
+// A lost frame must have no pose, a tracked one must have one: else the log and the
+// trajectory are not of one run.
+TEST_F(FrameLogTest, StatusDisagreeingWithTheTrajectoryIsRefused) {
+  std::vector<std::string> lines = lines_;
+  lines[6].replace(lines[6].find("\"tracking\""), 10, "\"lost\"");
+  EXPECT_NE(EvaluationErrorWith(lines).find("frame 6 (stamp 100.600000) is lost, but"), std::string::npos)
+      << EvaluationErrorWith(lines);
+}
+
+// With its frames' stamps shifted by one, the log is out of step with the sequence.
+TEST_F(FrameLogTest, FrameOfAnotherIndexIsRefused) {
+  std::vector<std::string> lines(lines_.begin(), lines_.begin() + 3);
+  const std::string stamp_of_frame_1 = "100.100000";
+  lines[0].replace(lines[0].find("100.000000"), 10, stamp_of_frame_1);
+  EXPECT_NE(EvaluationErrorWith(lines).find("frame 0 has the stamp 100.100000 of the sequence's frame 1"),
+            std::string::npos)
+      << EvaluationErrorWith(lines);
+}
+
+// `segslam run` records the frames it read in the trajectory's header: a log whose last
+// lines (lost frames, without poses) are gone disagrees with it.
+TEST_F(FrameLogTest, CountDisagreeingWithTheTrajectoryHeaderIsRefused) {
+  std::vector<StampedPose> first_ten = GroundTruth(0);
+  first_ten.resize(10);
+  WriteTumTrajectory(dir_ / "run" / "trajectory.txt", first_ten,
+                     "segslam run, mode mutual, sequence test\ninstance masks: gt\nframes run: 12");
+  std::vector<std::string> lines(lines_.begin(), lines_.begin() + 12);
+  for (int i = 10; i < 12; ++i) lines[i].replace(lines[i].find("\"tracking\""), 10, "\"lost\"");
+  EXPECT_EQ(EvaluationErrorWith(lines), "");
+  lines.resize(10);
+  EXPECT_NE(EvaluationErrorWith(lines).find((dir_ / "run" / "frames.jsonl").string() +
+                                            ": 10 frame(s), but " + (dir_ / "run" / "trajectory.txt").string() +
+                                            " says the run read 12"),
+            std::string::npos)
+      << EvaluationErrorWith(lines);
+}
+
 TEST_F(RunEvaluationTest, RunWithoutFrameLogNamesTheFile) {
   WriteSequence(dir_ / "sequence", GroundTruth(0));
   fs::create_directories(dir_ / "run");

@@ -150,7 +150,7 @@ TEST_F(ScenarioCliTest, TinyRunWritesTheReportAndItsExitCodeFollowsTheThresholds
                                  (dir_ / "report2").string() + " --junit " + junit.string());
   std::printf("%s", fail.stdout_text.c_str());
   EXPECT_EQ(fail.exit_code, 2) << fail.stderr_text;
-  EXPECT_NE(fail.stdout_text.find("(cached)"), std::string::npos);
+  EXPECT_NE(fail.stdout_text.find("(cached; sizes and SHA-256s match its manifest.json"), std::string::npos);
   EXPECT_NE(fail.stdout_text.find("FAIL  mutual.ate_rmse_m"), std::string::npos);
   EXPECT_NE(fail.stdout_text.find("1 of 2 expectations passed"), std::string::npos);
   const nlohmann::json parallel = nlohmann::json::parse(ReadText(dir_ / "report2" / "results.json"));

@@ -115,7 +115,8 @@ TEST_F(TumReferenceTest, FileEvaluationGivesTheSameNumbers) {
       EvaluateTrajectoryFiles(kTumDir + "/groundtruth.txt", kTumDir + "/rgbdslam_estimate.txt",
                               AteOptions{}, RpeOptions{});
   EXPECT_EQ(Printed(evaluation.ate.translation_m.rmse), "0.013473");
-  EXPECT_EQ(evaluation.rpe.pairs.size(), 753u);
+  ASSERT_TRUE(evaluation.rpe.has_value()) << evaluation.rpe_missing_reason;
+  EXPECT_EQ(evaluation.rpe->pairs.size(), 753u);
 }
 
 TEST(ErrorStatisticsTest, NumpyConventions) {
@@ -371,6 +372,36 @@ TEST(TrajectoryFilesTest, PairErrorsNameBothFiles) {
   ExpectErrorContaining([&] { EvaluateTrajectoryFiles(missing, ground_truth, AteOptions{}, RpeOptions{}); },
                         missing);
   std::filesystem::remove_all(dir);
+}
+
+// The box's 8 poses span 0.7 s: an ATE, and no pose pair 1 s apart for the RPE. The ATE
+// is given and the RPE's absence explained, rather than the whole evaluation failing.
+TEST(TrajectoryFilesTest, SequenceShorterThanTheRpeDeltaGivesAteWithoutRpe) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                    ("segslam_trajectory_short_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const BoxTrajectories box = MakeBoxTrajectories();
+  WriteTumTrajectory(dir / "groundtruth.txt", box.ground_truth, "");
+  WriteTumTrajectory(dir / "estimate.txt", box.estimate, "");
+  const TrajectoryEvaluation evaluation =
+      EvaluateTrajectoryFiles(dir / "groundtruth.txt", dir / "estimate.txt", AteOptions{}, RpeOptions{});
+  EXPECT_EQ(evaluation.ate.translation_m.count, 8u);
+  EXPECT_FALSE(evaluation.rpe.has_value());
+  EXPECT_NE(evaluation.rpe_missing_reason.find("RPE needs poses at least the delta of 1 s apart; the estimate spans "
+                                               "0.700 s"),
+            std::string::npos)
+      << evaluation.rpe_missing_reason;
+  std::filesystem::remove_all(dir);
+}
+
+// Translations near 1e200 m square to infinity: refused by name, not scored as inf or NaN.
+TEST(TrajectoryMetricsTest, PositionsFarBeyondEarthAreRefusedNotScoredAsInfinity) {
+  BoxTrajectories box = MakeBoxTrajectories();
+  box.estimate[3].T_wc.translation() = Eigen::Vector3d(1e200, -1e200, 3);
+  ExpectErrorContaining([&] { ComputeAte(box.ground_truth, box.estimate); },
+                        "estimate pose 3 (stamp 100.304000) lies 1.41e+200 m from the origin; positions beyond "
+                        "1e+07 m (10,000 km) are refused");
+  ExpectErrorContaining([&] { ComputeRpe(box.estimate, box.ground_truth); }, "ground-truth pose 3");
 }
 
 }  // namespace

@@ -69,6 +69,21 @@ TEST(ScenarioTest, KindChoosesCameraDefaults) {
   EXPECT_EQ(city.name, "c");
 }
 
+// yaml-cpp keeps both of a repeated key and a lookup takes the first: the second seed
+// below was ignored, unseen.
+TEST(ScenarioTest, RepeatedKeyIsRefusedNamingBothLines) {
+  EXPECT_EQ(ParseError("kind: office\nseed: 5\noffice:\n  frames: 40\nseed: 9\n"),
+            "my.yaml: line 5: key 'seed' appears twice in one mapping (first on line 2)");
+  EXPECT_EQ(ParseError("kind: office\noffice:\n  frames: 40\n  people_walking: 1\n  frames: 3\n"),
+            "my.yaml: line 5: key 'frames' appears twice in one mapping (first on line 3)");
+}
+
+// A key read from the file is quoted with its control bytes escaped, not echoed to the
+// terminal.
+TEST(ScenarioTest, UnknownKeyIsQuotedPrintably) {
+  EXPECT_EQ(ParseError("kind: office\n\x1b[31mevil: 1\n"), "my.yaml: unknown key '\\x1b[31mevil'");
+}
+
 TEST(ScenarioTest, UnknownKeyNamesKeyAndFile) {
   EXPECT_EQ(ParseError("city:\n  movng_cars: 3\n"), "my.yaml: unknown key 'city.movng_cars'");
   EXPECT_EQ(ParseError("colour: red\n"), "my.yaml: unknown key 'colour'");
@@ -305,8 +320,8 @@ TEST(ScenarioTest, LensDistortionIsFiveCoefficientsThatCoverTheImage) {
   // The office image's corners lie at normalised radius 0.76; with k3 = -1 the radius
   // stops growing at 0.72: the lens would fold the corners back onto the image.
   const std::string fold = ParseError("kind: office\ncamera: {distortion: [0, 0, 0, 0, -1]}\n");
-  EXPECT_NE(fold.find("my.yaml: camera.distortion: folds the image: its radial distortion stops growing at "
-                      "normalised radius 0.72"),
+  EXPECT_NE(fold.find("my.yaml: camera.distortion: the lens (k1 0, k2 0, k3 -1) folds the image: its radial "
+                      "distortion stops growing at normalised radius 0.72"),
             std::string::npos)
       << fold;
   // The same lens on a narrower view is fine.

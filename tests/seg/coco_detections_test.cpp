@@ -226,6 +226,17 @@ TEST_F(CocoDetectionsTest, WrittenFolderReadsBack) {
   EXPECT_TRUE(reader.Segment(sequence_.LoadFrame(1)).instances.empty());
 }
 
+// An empty list is a failed or wrong export, not "nothing in view": importing it would
+// leave a folder of empty masks that passes for a network's output.
+TEST_F(CocoDetectionsTest, EmptyDetectionListIsAnError) {
+  EXPECT_NE(ReadError(Write("empty.json", json::array())).find("empty.json: an empty results list: no detection to "
+                                                               "import"),
+            std::string::npos);
+  EXPECT_NE(ReadError(Write("dataset.json", {{"images", json::array()}, {"annotations", json::array()}}))
+                .find("dataset.json: \"annotations\" is an empty list"),
+            std::string::npos);
+}
+
 TEST_F(CocoDetectionsTest, BadInputIsNamed) {
   const json good = {{"image_id", Stem(0)}, {"category_id", 1}, {"segmentation", CompressedRle(Box({0, 0, 2, 2}))},
                      {"score", 0.9}};

@@ -13,6 +13,9 @@
 #include "scenes/scenario.h"
 #include "sim/dataset_generator.h"
 
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <gtest/gtest.h>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
@@ -26,6 +29,7 @@
 #include <filesystem>
 #include <map>
 #include <set>
+#include <sys/stat.h>
 #include <unistd.h>
 
 namespace segslam {
@@ -438,19 +442,25 @@ TEST(Overwrite, KeepsACompleteDatasetOnlyWhenAsked) {
   sim::GenerateOptions options;
   options.max_frames_per_pass = 2;
   sim::GenerateDataset(scenario, root / "d", options);
-  std::ofstream(root / "d" / "marker") << "first";
+  // A folder keeps its inode while it stays; a replacement is another folder renamed in.
+  const auto inode = [](const fs::path& dir) {
+    struct stat info {};
+    EXPECT_EQ(::stat(dir.c_str(), &info), 0) << dir;
+    return info.st_ino;
+  };
+  const auto first = inode(root / "d");
 
   options.overwrite = true;
   options.keep_complete_dataset = true;
   EXPECT_TRUE(sim::GenerateDataset(scenario, root / "d", options).kept_existing);
-  EXPECT_TRUE(fs::exists(root / "d" / "marker"));
+  EXPECT_EQ(inode(root / "d"), first);
   int entries = 0;
   for ([[maybe_unused]] const auto& entry : fs::directory_iterator(root)) ++entries;
   EXPECT_EQ(entries, 1);  // no staging folder left
 
   options.keep_complete_dataset = false;
   EXPECT_FALSE(sim::GenerateDataset(scenario, root / "d", options).kept_existing);
-  EXPECT_FALSE(fs::exists(root / "d" / "marker"));
+  EXPECT_NE(inode(root / "d"), first);
   EXPECT_TRUE(VerifyManifest(root / "d").empty());
   fs::remove_all(root);
 }

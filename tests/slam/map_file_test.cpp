@@ -217,6 +217,23 @@ TEST_F(MapFileTest, TruncatedFileIsRefusedAtEveryCut) {
                            std::to_string(bytes.size() / 2));
 }
 
+// A size field larger than any map is a damaged header, not a file cut short: a cut file
+// keeps its header's true size.
+TEST_F(MapFileTest, ImpossibleSizeFieldIsCorruptNotTruncated) {
+  const fs::path file = dir_ / "map.segmap";
+  SaveLongTermMap(file, MakeMap(3, 10));
+  std::string bytes = ReadBytes(file);
+  bytes[16 + 5] = static_cast<char>(0xff);  // the payload size's sixth byte: about 2^45 bytes
+  WriteBytes(file, bytes);
+  ExpectLoadFails(file, "corrupt: the header gives " + std::to_string(LittleEndian(bytes, 16, 8)) +
+                            " bytes of map data, more than any map holds");
+  try {
+    LoadLongTermMap(file);
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()).find("truncated"), std::string::npos) << e.what();
+  }
+}
+
 TEST_F(MapFileTest, FlippedPayloadByteIsCorrupt) {
   const fs::path file = dir_ / "map.segmap";
   SaveLongTermMap(file, MakeMap(3, 10));
@@ -255,7 +272,7 @@ TEST_F(MapFileTest, FutureVersionIsNamed) {
 }
 
 TEST_F(MapFileTest, MissingAndEmptyFilesAreNamed) {
-  ExpectLoadFails(dir_ / "nowhere.segmap", "no such file");
+  ExpectLoadFails(dir_ / "nowhere.segmap", "file does not exist");
   WriteBytes(dir_ / "empty.segmap", "");
   ExpectLoadFails(dir_ / "empty.segmap", "empty file");
 }
