@@ -334,7 +334,7 @@ bool EnsureDataset(const scenes::Scenario& scenario, const fs::path& dataset, co
   bool damaged = false;
   if (cached) {
     // A file edited, cut or deleted since generation would be read as the scenario's.
-    const CachedDatasetCheck check = CheckCachedDataset(dataset);
+    const CachedDatasetCheck check = CheckCachedDataset(dataset, args.verify);
     if (check.problems.empty()) {
       fmt::print("dataset {} (cached; {} manifest.json in {:.1f} s)\n", dataset.string(),
                  check.hashed ? "sizes and SHA-256s match its" : "sizes match its", check.seconds);
@@ -563,6 +563,9 @@ void AddScenarioCommand(CLI::App& app, std::function<int()>* action) {
   run->add_option("--cache", args->cache_dir, "Folder of cached datasets (<name>-<hash> inside)")->capture_default_str();
   run->add_option("--set", args->overrides, "Override a scenario key, e.g. --set city.moving_cars=8 (repeatable)");
   run->add_option("--gl", args->gl, "Off-screen GL back-end for generation: osmesa or egl")->capture_default_str();
+  run->add_flag("--verify", args->verify,
+                "Compare every file of a cached dataset with its manifest.json's SHA-256 (by default sizes each time, "
+                "hashes on a process's first use)");
   run->add_flag("-q,--quiet", args->quiet, "No progress bars");
   run->callback([args, action] { *action = [args] { return RunScenario(*args); }; });
   AddSuiteCommand(*scenario, action);

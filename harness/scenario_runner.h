@@ -23,6 +23,7 @@ struct ScenarioRunRequest {
   std::string gl = "osmesa";
   std::vector<std::string> overrides;  // KEY=VALUE scenario overrides (--set)
   bool quiet = false;                  // no progress bars
+  bool verify = false;                 // hash a cached dataset's files on every use, not only the first
   std::string progress_prefix;         // put before each progress line, e.g. "[point 2/5] "
 };
 

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "core/error.h"
+#include "core/manifest.h"
 #include "tests/core/test_util.h"
 
 namespace segslam::harness {
@@ -91,6 +92,35 @@ TEST_F(DatasetCacheTest, AMissingCacheListsNothingAndAnUnreadableRecordCountsAsN
   ASSERT_EQ(entries.size(), 1u);
   EXPECT_EQ(entries[0].code_version, "");
   EXPECT_TRUE(IsStale(entries[0], "v2"));
+}
+
+// A cached dataset is checked against its manifest.json before reuse: sizes every time,
+// SHA-256s on this process's first check of it (or always when asked), so a PNG edited in
+// place (same size) is caught where a size check alone would miss it.
+TEST_F(DatasetCacheTest, CachedDatasetIsCheckedAgainstItsManifest) {
+  const fs::path dataset = cache_ / "office-cafecafecafe";
+  fs::create_directories(dataset / "pass1" / "depth");
+  std::ofstream(dataset / "pass1" / "depth" / "0.000000.png") << std::string(500, 'd');
+  std::ofstream(dataset / "pass1" / "rgb.txt") << "0.000000 rgb/0.000000.png\n";
+  WriteManifest(dataset, nlohmann::json::object());
+
+  const CachedDatasetCheck first = CheckCachedDataset(dataset);
+  EXPECT_TRUE(first.hashed);
+  EXPECT_TRUE(first.problems.empty());
+
+  std::ofstream(dataset / "pass1" / "depth" / "0.000000.png") << std::string(499, 'd') << 'e';  // same size
+  const CachedDatasetCheck sizes_only = CheckCachedDataset(dataset);
+  EXPECT_FALSE(sizes_only.hashed);  // this process hashed it already
+  EXPECT_TRUE(sizes_only.problems.empty());
+  const CachedDatasetCheck verified = CheckCachedDataset(dataset, /*always_hash=*/true);
+  EXPECT_TRUE(verified.hashed);
+  ASSERT_EQ(verified.problems.size(), 1u);
+  EXPECT_NE(verified.problems[0].find("pass1/depth/0.000000.png"), std::string::npos) << verified.problems[0];
+
+  fs::remove(dataset / "pass1" / "rgb.txt");
+  const CachedDatasetCheck missing = CheckCachedDataset(dataset);
+  ASSERT_EQ(missing.problems.size(), 1u);
+  EXPECT_NE(missing.problems[0].find("pass1/rgb.txt"), std::string::npos) << missing.problems[0];
 }
 
 }  // namespace

@@ -89,6 +89,36 @@ TEST_F(ScenarioCliTest, OutFolderOfOtherFilesIsRefusedAndKept) {
   EXPECT_FALSE(fs::exists(dir_ / "cache"));
 }
 
+// A cached dataset whose files changed since generation is not used as the scenario's:
+// a depth image edited in place (its size kept) is found by its SHA-256 on the next
+// process's first use, and the dataset is generated anew.
+TEST_F(ScenarioCliTest, AlteredCachedDatasetIsGeneratedAnew) {
+  const std::string common = " --frames 3 --modes plain --repeats 1 -q --cache " + (dir_ / "cache").string() +
+                             " --out " + (dir_ / "report").string();
+  const CommandOutput first = Run("scenario run " + kSmallOffice.string() + common);
+  ASSERT_EQ(first.exit_code, 0) << first.stderr_text;
+  fs::path depth;
+  for (const auto& entry : fs::recursive_directory_iterator(dir_ / "cache")) {
+    if (entry.path().parent_path().filename() == "depth" && entry.path().extension() == ".png") depth = entry.path();
+  }
+  ASSERT_FALSE(depth.empty());
+  std::string bytes = ReadText(depth);
+  bytes[bytes.size() / 2] ^= 0x5a;
+  std::ofstream(depth, std::ios::binary) << bytes;
+
+  const CommandOutput second = Run("scenario run " + kSmallOffice.string() + common);
+  EXPECT_EQ(second.exit_code, 0) << second.stderr_text;
+  EXPECT_NE(second.stdout_text.find("differs from its manifest.json in 1 file(s)"), std::string::npos)
+      << second.stdout_text;
+  EXPECT_NE(second.stdout_text.find("generating it anew"), std::string::npos) << second.stdout_text;
+  EXPECT_NE(ReadText(depth), bytes);  // the generated file is back
+
+  const CommandOutput third = Run("scenario run " + kSmallOffice.string() + common + " --verify");
+  EXPECT_EQ(third.exit_code, 0) << third.stderr_text;
+  EXPECT_NE(third.stdout_text.find("(cached; sizes and SHA-256s match its manifest.json"), std::string::npos)
+      << third.stdout_text;
+}
+
 TEST_F(ScenarioCliTest, TinyRunWritesTheReportAndItsExitCodeFollowsTheThresholds) {
   const std::string cache = (dir_ / "cache").string();
   const std::string common = " --frames 25 --repeats 2 --modes plain,mutual -q --cache " + cache;
