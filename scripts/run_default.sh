@@ -14,7 +14,7 @@
 # to generate, the eight runs in 651 s); the paper's ten repeats:
 # ./build/segslam scenario run scenarios/city_boulevard.yaml --jobs "$(nproc)"
 # The street-grid route of scenarios/city_street_grid.yaml, where traffic does not mislead
-# plain (README status), runs the same way.
+# plain (docs/results.md), runs the same way.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install_deps.sh

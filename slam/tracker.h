@@ -179,7 +179,7 @@ struct TrackerOptions {
   // lost: on a boulevard of repeated façades pass 2 otherwise relocalized 124 m down the
   // street (98 local-map inliers there, 48 where it was) and stayed there for eleven
   // frames, until the off-map relocalization put it back; a right pose with a rival of
-  // 0.56 of its support is lost for one frame (README, "Run SLAM").
+  // 0.56 of its support is lost for one frame (docs/usage.md, "Run SLAM").
   int min_rival_consensus = 10;
   double rival_pose_distance_m = 2.0;
   double rival_support_ratio = 0.4;
@@ -189,7 +189,7 @@ struct TrackerOptions {
   // a consensus holding 20 % of them is drawn in 2000 samples with probability 0.96,
   // 25 % with 0.9996. With 300 samples of five (EPnP) those were 0.09 and 0.25: pass 2
   // of a boulevard missed its true place for four frames and then took a look-alike
-  // 125 m on, the one consensus that a lucky draw found (README, "Run SLAM"). On 100
+  // 125 m on, the one consensus that a lucky draw found (docs/usage.md, "Run SLAM"). On 100
   // matches a round takes 30 ms instead of 4.5 (slam_benchmarks), paid by lost frames.
   int relocalization_ransac_iterations = 2000;
   // Localization mode: a frame with fewer fine-pose inliers on the long-term map's points
@@ -247,7 +247,7 @@ struct TrackerOptions {
   // made by the object against what lies behind it and moves with the object, yet its
   // keypoint often falls just outside the mask. On city_boulevard, where cars pass
   // close, those corners bent mutual's route: fcis-like, pass-1 ATE 0.22 m with no margin,
-  // 0.10 m with 8 px (README).
+  // 0.10 m with 8 px (docs/usage.md, "Run SLAM").
   int instance_margin_px = 8;
   // An instance of a class that does not move (not on the moveable shortlist: a traffic
   // light, a bench, a hydrant) is judged moving only on at least this many measured
