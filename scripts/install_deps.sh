@@ -11,6 +11,7 @@ packages=(
   libyaml-cpp-dev libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev
   libtbb-dev libpng-dev libssl-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  clang-14 libclang-rt-14-dev llvm-14  # fuzz targets: clang, libFuzzer, llvm-symbolizer (docs/testing.md)
   chromium  # the HTML report is checked in a headless browser (scripts/check_report.sh)
 )
 
