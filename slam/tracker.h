@@ -151,12 +151,10 @@ struct FrameResult {
 
 struct TrackerOptions {
   OrbExtractorOptions orb;
-  // Depth enters the optimisation as ORB-SLAM2's "virtual stereo" coordinate
-  // u_r = u - bf / depth. A disparity bf / z with one pixel of noise means a depth noise
-  // of z^2 / bf, so bf = 1 / depth_sigma_at_1m weighs depth as the sensor measures it
-  // (Kinect: about 1.5 mm at 1 m, growing with z^2). ORB-SLAM2's fixed 8 cm baseline
-  // (bf ~ 40) trusts Kinect depth ~15 times less than it deserves, which lets bundle
-  // adjustment slide points along their rays.
+  // Depth noise at 1 m in metres (> 0; grows with depth squared). Depth enters the
+  // optimisation as ORB-SLAM2's "virtual stereo" coordinate u_r = u - bf / depth with
+  // bf = 1 / depth_sigma_at_1m, so depth is weighed as the sensor measures it (Kinect:
+  // about 1.5 mm at 1 m); ORB-SLAM2's fixed baseline trusts it ~15 times less.
   double depth_sigma_at_1m = 0.0015;
   // Points are created only up to this depth; farther depth is too noisy to map.
   float max_point_depth_m = 40.0f;
@@ -172,25 +170,20 @@ struct TrackerOptions {
   // relocalization, as ORB-SLAM, so a wrong relocalization does not stick).
   int min_tracking_inliers = 30;
   int min_relocalization_inliers = 50;
-  // A relocalization also solves for a rival pose on the matches the first pose's
-  // consensus left out (at least min_rival_consensus of them agreeing), and tracks both
-  // on the local map. When they lie more than rival_pose_distance_m apart and the weaker
-  // has at least rival_support_ratio of the stronger's local-map inliers, the frame stays
-  // lost: on a boulevard of repeated façades pass 2 otherwise relocalized 124 m down the
-  // street (98 local-map inliers there, 48 where it was) and stayed there for eleven
-  // frames, until the off-map relocalization put it back; a right pose with a rival of
-  // 0.56 of its support is lost for one frame (docs/usage.md, "Run SLAM").
+  // Look-alike guard: a relocalization also solves for a rival pose on the matches the
+  // first pose's consensus left out (at least min_rival_consensus of them agreeing;
+  // a huge value turns the guard off), and tracks both on the local map. When they lie
+  // more than rival_pose_distance_m apart and the weaker has at least
+  // rival_support_ratio (0..1) of the stronger's local-map inliers, the frame stays
+  // lost: two places that explain the view about as well are not a relocalization
+  // (figures: docs/tuning.md, "The tracker").
   int min_rival_consensus = 10;
   double rival_pose_distance_m = 2.0;
   double rival_support_ratio = 0.4;
   // RANSAC PnP of a relocalization: at most this many minimal samples of four matches
-  // (AP3P), stopping sooner once a consensus is found with 99 % confidence. Across a
-  // whole map few matches pass the ratio test (a fifth is common on a city route), and
-  // a consensus holding 20 % of them is drawn in 2000 samples with probability 0.96,
-  // 25 % with 0.9996. With 300 samples of five (EPnP) those were 0.09 and 0.25: pass 2
-  // of a boulevard missed its true place for four frames and then took a look-alike
-  // 125 m on, the one consensus that a lucky draw found (docs/usage.md, "Run SLAM"). On 100
-  // matches a round takes 30 ms instead of 4.5 (slam_benchmarks), paid by lost frames.
+  // (AP3P, >= 1), stopping sooner once a consensus is found with 99 % confidence. Across
+  // a whole map as few as a fifth of the matches can be right, and a consensus of 20 %
+  // is drawn in 2000 samples with probability 0.96 (docs/tuning.md, "The tracker").
   int relocalization_ransac_iterations = 2000;
   // Localization mode: a frame with fewer fine-pose inliers on the long-term map's points
   // than this is off the map (ORB-SLAM2's localization mode counts 10), tracked only on
@@ -204,17 +197,12 @@ struct TrackerOptions {
   bool relocalize_off_map = true;
   double off_map_relocalization_interval_s = 0.5;
   // Localization mode: a relocalization on the long-term map is on probation for
-  // relocalization_probation_s. Meanwhile, at most once an
-  // off_map_relocalization_interval_s, the whole map is searched again; a pose found more
-  // than rival_pose_distance_m away with at least relocalization_recheck_margin times the
-  // tracked pose's inliers on the long-term map replaces it, and what was made since the
-  // relocalization is dropped. Along a boulevard of repeated façades a relocalization can
-  // land at a look-alike whose rival RANSAC did not find (it did 125 m on with 300
-  // samples: relocalization_ransac_iterations) and then track there on the map: a
-  // look-alike explains the façades, where the frame is explains the façades and
-  // everything else in view, and a few frames on a new search finds that place with
-  // more support.
-  // 0 turns the re-check off.
+  // relocalization_probation_s seconds (0 turns the re-check off). Meanwhile, at most once
+  // an off_map_relocalization_interval_s, the whole map is searched again; a pose found
+  // more than rival_pose_distance_m away with at least relocalization_recheck_margin
+  // times the tracked pose's long-term inliers replaces it, and what was made since the
+  // relocalization is dropped: a look-alike explains part of the view, the true place
+  // all of it, and a few frames on a new search finds the true place with more support.
   double relocalization_probation_s = 5.0;
   double relocalization_recheck_margin = 1.25;
   // Keyframes (ORB-SLAM2 RGB-D rules): a new one when the tracked inliers fall below
@@ -241,13 +229,11 @@ struct TrackerOptions {
   // a parked car must not make it a moving one (all points of a moving rigid object move).
   int min_points_to_judge = 4;
   double moving_share_threshold = 0.5;
-  // A background feature within this many pixels of the mask of an instance kept out of
-  // the pose and map (moving, or not judged yet) is kept out with it (mutual and oracle;
-  // mask-moveable drops what lies on the masks). A corner on a moving object's outline is
-  // made by the object against what lies behind it and moves with the object, yet its
-  // keypoint often falls just outside the mask. On city_boulevard, where cars pass
-  // close, those corners bent mutual's route: fcis-like, pass-1 ATE 0.22 m with no margin,
-  // 0.10 m with 8 px (docs/usage.md, "Run SLAM").
+  // A background feature within this many pixels (>= 0) of the mask of an instance kept
+  // out of the pose and map (moving, or not judged yet) is kept out with it (mutual and
+  // oracle; mask-moveable drops what lies on the masks): a corner on a moving object's
+  // outline moves with the object, yet its keypoint often falls just outside the mask
+  // (figures: docs/tuning.md, "The tracker").
   int instance_margin_px = 8;
   // An instance of a class that does not move (not on the moveable shortlist: a traffic
   // light, a bench, a hydrant) is judged moving only on at least this many measured
