@@ -343,12 +343,20 @@ std::string TumSequence::FirstFrameSha256() const {
   return Sha256OfFile(dir_ / entries_.front().rgb_file);
 }
 
-RgbdFrame TumSequence::LoadFrame(size_t i) const {
+const TumFrameEntry& TumSequence::Entry(size_t i) const {
   if (i >= entries_.size()) {
     throw FileError(dir_, fmt::format("frame {} out of range (sequence has {} frames)", i,
                                       entries_.size()));
   }
-  const TumFrameEntry& entry = entries_[i];
+  return entries_[i];
+}
+
+std::string TumSequence::FrameStem(size_t i) const {
+  return std::filesystem::path(Entry(i).rgb_file).stem().string();
+}
+
+RgbdFrame TumSequence::LoadFrame(size_t i) const {
+  const TumFrameEntry& entry = Entry(i);
   RgbdFrame frame;
   frame.index = static_cast<int>(i);
   frame.stamp_s = entry.rgb_stamp_s;

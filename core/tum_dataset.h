@@ -101,6 +101,12 @@ class TumSequence {
   // camera's.
   RgbdFrame LoadFrame(size_t i) const;
 
+  // Frame i's colour file name without folder and extension ("rgb/1.305031.png" ->
+  // "1.305031"): the name the frame's other files take, its ground-truth mask
+  // masks/<stem>.png and a mask folder's <stem>.png and <stem>.json (seg/external_masks.h).
+  // Throws as LoadFrame does for i out of range.
+  std::string FrameStem(size_t i) const;
+
   // SHA-256 of the first frame's colour file, lowercase hex: what tells this sequence
   // from another with the same stamps (the two passes of a generated dataset, or two
   // datasets, share them). Throws naming the file if it cannot be read or there is none.
@@ -123,6 +129,9 @@ class TumSequence {
   const std::vector<StampedPose>& groundtruth() const { return groundtruth_; }
 
  private:
+  // entries_[i]; throws segslam::FileError naming the folder for i out of range.
+  const TumFrameEntry& Entry(size_t i) const;
+
   std::filesystem::path dir_;
   SequenceCamera camera_;
   std::vector<TumFrameEntry> entries_;

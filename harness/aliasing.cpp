@@ -125,7 +125,7 @@ struct PairFeatures {
 cv::Mat LoadMaskIfAny(const TumSequence& sequence, size_t index) {
   const fs::path masks = sequence.dir() / "masks";
   if (!fs::is_directory(masks)) return {};
-  const fs::path png = masks / (fs::path(sequence.entries()[index].rgb_file).stem().string() + ".png");
+  const fs::path png = masks / (sequence.FrameStem(index) + ".png");
   if (!fs::exists(png)) throw FileError(png, "missing: the sequence has masks/, and every frame needs its mask");
   return sequence.LoadInstanceMask(png);
 }

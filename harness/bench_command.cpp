@@ -5,16 +5,16 @@
 // `segslam bench aliasing DATASET`: bench_aliasing_command.cpp.
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/statistics.h"
 #include "core/tum_dataset.h"
 #include "harness/cli_numbers.h"
 #include "harness/commands.h"
+#include "harness/dataset_run.h"
 #include "harness/machine.h"
 #include "harness/progress_bar.h"
 #include "harness/slam_runner.h"
 #include "slam/tracker.h"
-#include "slam/tracker_option_overrides.h"
 #include "scenes/scenario.h"
-#include "seg/refiner_option_overrides.h"
 #include "seg/simulated_segmenter.h"
 #include "sim/dataset_generator.h"
 
@@ -110,15 +110,10 @@ int RunBenchRender(const BenchRenderArgs& args) {
 
 struct BenchSlamArgs {
   std::string sequence;
-  std::string mode = "mutual";
-  std::string masks = "gt";
-  std::string segmenter;
-  std::uint64_t seed = 1;
-  int frames = 0;
+  // What `segslam run` also takes: mode, masks, segmenter, seed, frames, camera, tracker
+  // and refiner overrides (no --strength, --map-in or --map-out here).
+  DatasetRunOptions run;
   std::string json_file;
-  std::string camera_file;
-  std::vector<std::string> tracker_options;  // NAME=VALUE overrides of slam::TrackerOptions
-  std::vector<std::string> refiner_options;  // NAME=VALUE overrides of the loop's seg::RefinerOptions
 };
 
 struct TimeSummary {
@@ -129,8 +124,7 @@ TimeSummary Summarize(std::vector<double> values) {
   TimeSummary summary;
   if (values.empty()) return summary;
   std::sort(values.begin(), values.end());
-  summary.median = values.size() % 2 ? values[values.size() / 2]
-                                     : 0.5 * (values[values.size() / 2 - 1] + values[values.size() / 2]);
+  summary.median = Median(values);
   summary.p90 = values[std::min(values.size() - 1, static_cast<size_t>(0.9 * values.size()))];
   double sum = 0;
   for (double v : values) sum += v;
@@ -139,25 +133,18 @@ TimeSummary Summarize(std::vector<double> values) {
 }
 
 int RunBenchSlam(const BenchSlamArgs& args) {
-  SlamRunOptions options;
-  options.mode = slam::ParseSlamMode(args.mode);
-  options.masks = args.masks;
-  options.segmenter = args.segmenter;
-  options.segmenter_seed = args.seed;
-  options.max_frames = args.frames;
+  SlamRunOptions options = SlamRunOptionsFor(args.run);
   options.read_ahead = false;
-  for (const std::string& assignment : args.tracker_options) slam::SetTrackerOption(&options.tracker, assignment);
-  if (!args.refiner_options.empty()) {
-    if (options.mode != slam::SlamMode::kMutual || (args.segmenter.empty() && args.masks == "gt")) {
+  if (!args.run.refiner_options.empty()) {
+    if (!RunsMutualLoop(args.run)) {
       throw Error("bench slam: --refiner applies to the mutual loop: mode mutual with --segmenter or --masks");
     }
-    for (const std::string& assignment : args.refiner_options) seg::SetRefinerOption(&options.refiner, assignment);
     if (std::string problem; !options.refiner.IsValid(&problem)) throw Error("bench slam: --refiner: " + problem);
   }
   // One core, as ORB-SLAM2's tracking thread: OpenCV's own threads would flatter us.
   cv::setNumThreads(1);
-  const TumSequence sequence = TumSequence::OpenWithCameraFile(args.sequence, args.camera_file);
-  ProgressBar bar("bench slam " + args.mode);
+  const TumSequence sequence = TumSequence::OpenWithCameraFile(args.sequence, args.run.camera_file);
+  ProgressBar bar("bench slam " + args.run.mode);
   const auto start = std::chrono::steady_clock::now();
   options.on_frame = [&](int done, int total) {
     const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -181,22 +168,23 @@ int RunBenchSlam(const BenchSlamArgs& args) {
   // Per-frame times depend on the CPU (1.7x apart on two machines of the same kind): name it.
   const nlohmann::json machine = MachineDescription();
   const std::string masks = options.mode == slam::SlamMode::kPlain ? "none"
-                            : !args.segmenter.empty()               ? "segmenter " + args.segmenter
-                                                                    : args.masks;
+                            : !args.run.segmenter.empty()           ? "segmenter " + args.run.segmenter
+                                                                    : args.run.masks;
   fmt::print("sequence {} ({}x{}), mode {}, masks {}, {} frames, {} features requested, one core of {}\n",
-             args.sequence, sequence.camera().intrinsics.width, sequence.camera().intrinsics.height, args.mode,
+             args.sequence, sequence.camera().intrinsics.width, sequence.camera().intrinsics.height, args.run.mode,
              masks, run.frames.size(), options.tracker.orb.max_features, MachineLine(machine));
-  for (const auto& [what, overrides] : {std::pair{"tracker", args.tracker_options}, {"refiner", args.refiner_options}}) {
+  for (const auto& [what, overrides] :
+       {std::pair{"tracker", args.run.tracker_options}, {"refiner", args.run.refiner_options}}) {
     if (!overrides.empty()) fmt::print("{} options: {}\n", what, fmt::join(overrides, " "));
   }
   fmt::print("{:<26} {:>10} {:>10} {:>10}\n", "stage (ms per frame)", "median", "p90", "mean");
   nlohmann::json json = {{"sequence", args.sequence},
-                         {"mode", args.mode},
+                         {"mode", args.run.mode},
                          {"masks", masks},
                          {"frames", run.frames.size()},
                          {"features_requested", options.tracker.orb.max_features},
-                         {"tracker_options", args.tracker_options},
-                         {"refiner_options", args.refiner_options},
+                         {"tracker_options", args.run.tracker_options},
+                         {"refiner_options", args.run.refiner_options},
                          {"machine", machine}};
   for (const auto& [name, values] : stages) {
     const TimeSummary s = Summarize(values);
@@ -237,24 +225,24 @@ void AddBenchCommand(CLI::App& app, std::function<int()>* action) {
   slam->add_option("sequence", slam_args->sequence,
                    "A TUM-layout sequence (with masks/ for mutual and mask-moveable, unless --masks names a folder)")
       ->required();
-  slam->add_option("--mode", slam_args->mode, "plain, mask-moveable, mutual or oracle")
+  slam->add_option("--mode", slam_args->run.mode, "plain, mask-moveable, mutual or oracle")
       ->check(CLI::IsMember(slam::SlamModeNames()))
       ->capture_default_str();
-  slam->add_option("--frames", slam_args->frames, "Only the first N frames (0 = all)")
+  slam->add_option("--frames", slam_args->run.frames, "Only the first N frames (0 = all)")
       ->check(WholeNumberIn(0, kMaxFrames, "0 = all"));
-  slam->add_option("--masks", slam_args->masks,
+  slam->add_option("--masks", slam_args->run.masks,
                    "'gt' (the sequence's masks/) or a folder of external masks (mutual: refined in the loop)")
       ->capture_default_str();
-  slam->add_option("--segmenter", slam_args->segmenter,
+  slam->add_option("--segmenter", slam_args->run.segmenter,
                    "Simulated segmenter preset on the sequence's ground-truth masks (mutual: refined in the loop)")
       ->check(CLI::IsMember(seg::SimulatedSegmenterOptions::PresetNames()));
-  slam->add_option("--seed", slam_args->seed, "Seed of the simulated segmenter")->capture_default_str();
+  slam->add_option("--seed", slam_args->run.seed, "Seed of the simulated segmenter")->capture_default_str();
   slam->add_option("--json", slam_args->json_file, "Also write the results as JSON");
-  slam->add_option("--camera", slam_args->camera_file,
+  slam->add_option("--camera", slam_args->run.camera_file,
                    "camera.yaml to use instead of the sequence's own (for a real sequence without one)");
-  slam->add_option("--tracker", slam_args->tracker_options,
+  slam->add_option("--tracker", slam_args->run.tracker_options,
                    "Override a tracker option, NAME=VALUE (repeatable; see slam/tracker.h), e.g. orb.max_features=2000");
-  slam->add_option("--refiner", slam_args->refiner_options,
+  slam->add_option("--refiner", slam_args->run.refiner_options,
                    "Override a refinement option of the mutual loop, NAME=VALUE (repeatable; see seg/refiner.h)");
   slam->callback([slam_args, action] { *action = [slam_args] { return RunBenchSlam(*slam_args); }; });
 

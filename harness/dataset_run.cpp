@@ -29,17 +29,9 @@ PassRun RunPass(const DatasetRunOptions& args, const std::string& name, const fs
                 const fs::path& map_in, const fs::path& map_out, const fs::path& out_dir,
                 const std::optional<Eigen::Isometry3d>& fixed_alignment, bool in_map_frame = false) {
   const TumSequence sequence = TumSequence::OpenWithCameraFile(sequence_dir, args.camera_file);
-  SlamRunOptions options;
-  options.mode = slam::ParseSlamMode(args.mode);
-  options.masks = args.masks;
-  options.segmenter = args.segmenter;
-  options.segmenter_seed = args.seed;
-  options.segmenter_strength = args.strength;
+  SlamRunOptions options = SlamRunOptionsFor(args);
   if (RunsMutualLoop(args)) options.refined_masks_dir = out_dir / "refined_masks";
   options.map_in = map_in;
-  options.max_frames = args.frames;
-  for (const std::string& assignment : args.tracker_options) slam::SetTrackerOption(&options.tracker, assignment);
-  for (const std::string& assignment : args.refiner_options) seg::SetRefinerOption(&options.refiner, assignment);
   options.on_frame = [&](int done, int total) {
     if (args.on_frame) args.on_frame(name, done, total);
   };
@@ -109,6 +101,25 @@ bool IsTwoPassDataset(const fs::path& dataset) {
 
 bool RunsMutualLoop(const DatasetRunOptions& options) {
   return options.mode == "mutual" && (!options.segmenter.empty() || options.masks != "gt");
+}
+
+SlamRunOptions SlamRunOptionsFor(const DatasetRunOptions& options) {
+  SlamRunOptions slam_options;
+  slam_options.mode = slam::ParseSlamMode(options.mode);
+  slam_options.masks = options.masks;
+  slam_options.segmenter = options.segmenter;
+  slam_options.segmenter_seed = options.seed;
+  slam_options.segmenter_strength = options.strength;
+  slam_options.max_frames = options.frames;
+  for (const std::string& assignment : options.tracker_options) {
+    slam::SetTrackerOption(&slam_options.tracker, assignment);
+  }
+  if (RunsMutualLoop(options)) {
+    for (const std::string& assignment : options.refiner_options) {
+      seg::SetRefinerOption(&slam_options.refiner, assignment);
+    }
+  }
+  return slam_options;
 }
 
 void CheckDatasetRunOptions(const DatasetRunOptions& options) {

@@ -74,6 +74,12 @@ bool IsTwoPassDataset(const std::filesystem::path& dataset);
 // The mutual loop runs (and refines masks) in mutual mode with a segmenter or external masks.
 bool RunsMutualLoop(const DatasetRunOptions& options);
 
+// The SLAM runner's options for a sequence of a run with `options`: mode, masks,
+// segmenter, frames, and the tracker's and (where the mutual loop runs) the refiner's
+// overrides. What is a pass's own (map_in, refined_masks_dir, on_frame) the caller adds.
+// Throws segslam::Error on a mode that does not exist or a bad override.
+SlamRunOptions SlamRunOptionsFor(const DatasetRunOptions& options);
+
 // Throws segslam::Error on bad options (a mode that does not exist, an unknown tracker
 // option, --segmenter with external masks, refiner options where no loop runs or out of
 // range), so a command can refuse them before it prints or reads anything.

@@ -151,8 +151,7 @@ int RunMasksImport(const MasksImportArgs& args) {
     const size_t detected = masks.instances.size();
     const cv::Mat ids = FlattenToIdImage(&masks, size);
     hidden += static_cast<int>(detected - masks.instances.size());
-    seg::WriteExternalMaskFiles(staging.path(), fs::path(sequence.entries()[i].rgb_file).stem().string(), ids,
-                                masks);
+    seg::WriteExternalMaskFiles(staging.path(), sequence.FrameStem(i), ids, masks);
     if (!args.quiet) {
       const int done = static_cast<int>(i) + 1;
       const double elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -5,6 +5,10 @@
 // Pure functions over plain data: they know nothing of how runs are orchestrated. Each
 // returns the image; WriteFigure() writes one atomically. Inputs that cannot be drawn
 // (mismatched sizes, wrong image types) throw segslam::Error saying what is wrong.
+//
+// The plots are in report_figures.cpp, the pictures drawn on a frame (Figs. 5 and 6) in
+// frame_figures.cpp; both draw with the toolkit of harness/plot_toolkit.h, whose .cpp
+// also holds PlotAxes, SeriesColor and WriteFigure.
 #pragma once
 
 #include <cstddef>

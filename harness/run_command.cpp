@@ -31,18 +31,8 @@ namespace {
 
 struct RunArgs {
   std::string dataset;
-  std::string mode = "mutual";
-  std::string masks = "gt";
-  std::string segmenter;  // a simulated segmenter preset; empty = none
-  std::uint64_t seed = 1;
-  double strength = 1.0;  // scales the simulated segmenter's errors
-  std::string map_in;
-  std::string map_out;
+  DatasetRunOptions run;  // filled by the options of the same names
   std::string out_dir;
-  std::string camera_file;
-  int frames = 0;
-  std::vector<std::string> tracker_options;  // NAME=VALUE overrides of slam::TrackerOptions
-  std::vector<std::string> refiner_options;  // NAME=VALUE overrides of seg::RefinerOptions
   bool quiet = false;
 };
 
@@ -106,32 +96,22 @@ void PrintLoopSegmentation(const std::vector<PassRun>& passes) {
 }
 
 int RunRun(const RunArgs& args) {
-  DatasetRunOptions options;
-  options.mode = args.mode;
-  options.masks = args.masks;
-  options.segmenter = args.segmenter;
-  options.seed = args.seed;
-  options.strength = args.strength;
-  options.map_in = args.map_in;
-  options.map_out = args.map_out;
-  options.camera_file = args.camera_file;
-  options.frames = args.frames;
-  options.tracker_options = args.tracker_options;
-  options.refiner_options = args.refiner_options;
+  DatasetRunOptions options = args.run;
   CheckDatasetRunOptions(options);  // before anything is printed, read or written
-  if (args.strength != 1.0 && args.segmenter.empty()) {
+  if (options.strength != 1.0 && options.segmenter.empty()) {
     throw Error("run: --strength scales the simulated segmenter's errors: give --segmenter too");
   }
   const fs::path dataset(args.dataset);
-  const fs::path out_dir = args.out_dir.empty() ? dataset / ("run_" + args.mode) : fs::path(args.out_dir);
+  const fs::path out_dir = args.out_dir.empty() ? dataset / ("run_" + options.mode) : fs::path(args.out_dir);
   const std::string simulated =
-      fmt::format("simulated {} (seed {})", SimulatedSegmenterLabel(args.segmenter, args.strength), args.seed);
-  const std::string masks = args.mode == "plain"        ? "none"
-                            : !args.segmenter.empty()   ? simulated
-                                                        : args.masks;
-  fmt::print("segslam run: mode {}, masks {}{}{}\n", args.mode, masks,
+      fmt::format("simulated {} (seed {})", SimulatedSegmenterLabel(options.segmenter, options.strength), options.seed);
+  const std::string masks = options.mode == "plain"        ? "none"
+                            : !options.segmenter.empty()   ? simulated
+                                                           : options.masks;
+  fmt::print("segslam run: mode {}, masks {}{}{}\n", options.mode, masks,
              RunsMutualLoop(options) ? ", refined in the loop" : "",
-             args.refiner_options.empty() ? "" : " with " + fmt::format("{}", fmt::join(args.refiner_options, " ")));
+             options.refiner_options.empty() ? ""
+                                             : " with " + fmt::format("{}", fmt::join(options.refiner_options, " ")));
   // One progress bar per pass; each pass's rate counts from the end of the previous one.
   std::optional<ProgressBar> bar;
   std::string bar_pass;
@@ -142,7 +122,7 @@ int RunRun(const RunArgs& args) {
     if (args.quiet) return;
     if (!bar.has_value() || bar_pass != pass) {
       if (bar.has_value()) bar->Finish();
-      bar.emplace(fmt::format("run {} {}", args.mode, pass));
+      bar.emplace(fmt::format("run {} {}", options.mode, pass));
       bar_pass = pass;
     }
     const auto now = std::chrono::steady_clock::now();
@@ -170,31 +150,31 @@ void AddRunCommand(CLI::App& app, std::function<int()>* action) {
   cmd->add_option("dataset", args->dataset, "A TUM-layout sequence, or a dataset with pass1/ and pass2/")
       ->required();
   // Checked by slam::ParseSlamMode, whose error is one line like every other.
-  cmd->add_option("--mode", args->mode,
+  cmd->add_option("--mode", args->run.mode,
                   "plain, mask-moveable, mutual, or oracle (mutual with the true moving/static verdicts of a "
                   "generated dataset, for reference)");
-  cmd->add_option("--masks", args->masks,
+  cmd->add_option("--masks", args->run.masks,
                   "'gt' (the dataset's masks, used as they are) or a folder of external masks (refined in "
                   "the loop in mutual mode)");
-  cmd->add_option("--segmenter", args->segmenter,
+  cmd->add_option("--segmenter", args->run.segmenter,
                   "Simulated segmenter preset on the dataset's ground-truth masks (mutual: refined in the loop; "
                   "mask-moveable: raw)")
       ->check(CLI::IsMember(seg::SimulatedSegmenterOptions::PresetNames()));
-  cmd->add_option("--seed", args->seed, "Seed of the simulated segmenter")->capture_default_str();
-  cmd->add_option("--strength", args->strength,
+  cmd->add_option("--seed", args->run.seed, "Seed of the simulated segmenter")->capture_default_str();
+  cmd->add_option("--strength", args->run.strength,
                   "Scale of the simulated segmenter's errors (0 = ground truth, 1 = the preset, 2 = twice as bad)")
       ->check(NumberIn(0, 10))
       ->capture_default_str();
-  cmd->add_option("--map-in", args->map_in, "Localize on this long-term map (single sequence)");
-  cmd->add_option("--map-out", args->map_out, "Write the long-term map here (and a .ply beside it)");
+  cmd->add_option("--map-in", args->run.map_in, "Localize on this long-term map (single sequence)");
+  cmd->add_option("--map-out", args->run.map_out, "Write the long-term map here (and a .ply beside it)");
   cmd->add_option("--out,-o", args->out_dir, "Output folder (default DATASET/run_MODE)");
-  cmd->add_option("--frames", args->frames, "Only the first N frames of each sequence (0 = all)")
+  cmd->add_option("--frames", args->run.frames, "Only the first N frames of each sequence (0 = all)")
       ->check(WholeNumberIn(0, kMaxFrames, "0 = all"));
-  cmd->add_option("--camera", args->camera_file,
+  cmd->add_option("--camera", args->run.camera_file,
                   "camera.yaml to use instead of the sequence's own (for a real sequence without one)");
-  cmd->add_option("--tracker", args->tracker_options,
+  cmd->add_option("--tracker", args->run.tracker_options,
                   "Override a tracker option, NAME=VALUE (repeatable; see slam/tracker.h)");
-  cmd->add_option("--refiner", args->refiner_options,
+  cmd->add_option("--refiner", args->run.refiner_options,
                   "Override a refinement option of the mutual loop, NAME=VALUE (repeatable; see seg/refiner.h)");
   cmd->add_flag("-q,--quiet", args->quiet, "No progress bar");
   cmd->callback([args, action] { *action = [args] { return RunRun(*args); }; });

@@ -3,7 +3,7 @@
 // version), runs each mode `repeats` times (repeats differ by the simulated segmenter's
 // seed; SLAM itself is deterministic, so a mode without a segmenter runs once), scores
 // each run (harness/run_evaluation.h), checks the scenario's `expect:` thresholds on the
-// medians over repeats (harness/scenario_report.h names the metrics) and writes the
+// medians over repeats (harness/scenario_expectations.h names the metrics) and writes the
 // report directory:
 //   results.json  every run's metrics, the medians/min/max, the checks, the scenario,
 //                 seeds, code version and machine
@@ -41,6 +41,7 @@
 #include "harness/interrupt.h"
 #include "harness/progress_bar.h"
 #include "harness/run_evaluation.h"
+#include "harness/scenario_figures.h"
 #include "harness/scenario_report.h"
 #include "harness/scenario_runner.h"
 #include "scenes/scenario.h"

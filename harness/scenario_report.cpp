@@ -1,61 +1,24 @@
+// ScenarioReport (harness/scenario_report.h): the paper's tables from the spreads over
+// repeats, results.json, report.md and report.html, the terminal's text and JUnit XML.
 #include "harness/scenario_report.h"
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <optional>
-#include <set>
-#include <tuple>
 
 #include <fmt/format.h>
 
-#include "core/error.h"
-#include "core/image_io.h"
-#include "core/instances.h"
-#include "core/json_file.h"
-#include "core/pose.h"
-#include "core/statistics.h"
-#include "core/tum_dataset.h"
-#include "harness/dataset_run.h"
-#include "harness/interrupt.h"
+#include "core/strings.h"
 #include "harness/machine.h"
-#include "harness/report_figures.h"
-#include "harness/slam_runner.h"
-#include "harness/trajectory_metrics.h"
-#include "seg/external_masks.h"
-#include "seg/metrics.h"
-#include "seg/refiner_option_overrides.h"
-#include "seg/simulated_segmenter.h"
-#include "slam/tracker_option_overrides.h"
+#include "harness/map_relative_error.h"
+#include "harness/run_evaluation.h"
+#include "harness/scenario_figures.h"
 
 namespace segslam::harness {
 
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-const std::vector<std::string> kPasses = {"pass1", "pass2"};
-
-bool Contains(const std::vector<std::string>& list, const std::string& value) {
-  return std::find(list.begin(), list.end(), value) != list.end();
-}
-
-std::string Join(const std::vector<std::string>& parts, const std::string& separator) {
-  std::string text;
-  for (std::size_t i = 0; i < parts.size(); ++i) text += (i ? separator : "") + parts[i];
-  return text;
-}
-
-std::vector<std::string> Split(const std::string& text, char separator) {
-  std::vector<std::string> parts;
-  std::size_t start = 0;
-  while (true) {
-    const std::size_t end = text.find(separator, start);
-    parts.push_back(text.substr(start, end == std::string::npos ? std::string::npos : end - start));
-    if (end == std::string::npos) return parts;
-    start = end + 1;
-  }
-}
 
 nlohmann::json NumberJson(double value) { return std::isnan(value) ? nlohmann::json(nullptr) : nlohmann::json(value); }
 
@@ -90,16 +53,6 @@ std::string SpreadText(const Spread& s, int decimals, double scale = 1) {
   return text;
 }
 
-const Spread* FindSpread(const SpreadTable& table, const std::string& pass, const std::string& mode,
-                         const std::string& metric) {
-  const auto p = table.find(pass);
-  if (p == table.end()) return nullptr;
-  const auto m = p->second.find(mode);
-  if (m == p->second.end()) return nullptr;
-  const auto v = m->second.find(metric);
-  return v == m->second.end() ? nullptr : &v->second;
-}
-
 std::string Cell(const SpreadTable& table, const std::string& pass, const std::string& mode, const std::string& metric,
                  int decimals, double scale = 1) {
   const Spread* s = FindSpread(table, pass, mode, metric);
@@ -130,7 +83,7 @@ Table AteTable(const ScenarioReport& report) {
                 "localized frames only, so each pass's share of them is given below it.",
             {"sequence"}, {}};
   for (const auto& mode : report.bench.modes) ate.header.push_back(mode);
-  for (const auto& pass : kPasses) {
+  for (const auto& pass : kScenarioPasses) {
     std::vector<std::string> row = {report.scenario_name + " " + pass};
     std::vector<std::string> localized = {report.scenario_name + " " + pass + " localized [%]"};
     for (const auto& mode : report.bench.modes) {
@@ -149,7 +102,7 @@ Table RpeTable(const ScenarioReport& report) {
             {"sequence"},
             {}};
   for (const auto& mode : report.bench.modes) rpe.header.push_back(mode);
-  for (const auto& pass : kPasses) {
+  for (const auto& pass : kScenarioPasses) {
     std::vector<std::string> row = {report.scenario_name + " " + pass};
     for (const auto& mode : report.bench.modes) {
       row.push_back(Cell(report.spreads, pass, mode, "rpe_trans_rmse_m", 4) + " / " +
@@ -166,7 +119,7 @@ Table SegmentationTable(const ScenarioReport& report) {
                 report.bench.SegmenterLabel() + ".",
             {"sequence", "mode", "raw mAP", "raw AP50", "raw mIoU", "refined mAP", "refined AP50", "refined mIoU"},
             {}};
-  for (const auto& pass : kPasses) {
+  for (const auto& pass : kScenarioPasses) {
     for (const auto& mode : report.bench.modes) {
       const Spread* raw = FindSpread(report.spreads, pass, mode, "seg_raw_map");
       if (raw == nullptr || raw->count == 0) continue;
@@ -220,7 +173,7 @@ Table MovingDetectionTable(const ScenarioReport& report) {
                    "tracks.json's moving flag.",
                {"sequence", "mode", "precision", "recall", "coverage", "moving features, mean", "moving features, max"},
                {}};
-  for (const auto& pass : kPasses) {
+  for (const auto& pass : kScenarioPasses) {
     for (const auto& mode : report.bench.modes) {
       if (mode != "mutual") continue;
       moving.rows.push_back({report.scenario_name + " " + pass, mode,
@@ -242,7 +195,7 @@ Table RunsTable(const ScenarioReport& report) {
   for (const RepeatRun& run : report.runs) {
     std::vector<std::string> row = {run.mode, std::to_string(run.repeat),
                                     report.bench.ModeIsDeterministic(run.mode) ? "-" : std::to_string(run.seed)};
-    for (const auto& pass : kPasses) {
+    for (const auto& pass : kScenarioPasses) {
       double ate = kNaN, localized = kNaN;
       for (const PassEvaluation& p : run.evaluation.passes) {
         if (p.name != pass) continue;
@@ -271,191 +224,6 @@ std::vector<Table> ReportTables(const ScenarioReport& report) {
   return tables;
 }
 
-constexpr const char* kMaskFigureFile = "figures/masks_raw_vs_refined.png";
-constexpr const char* kFeatureFigureFile = "figures/features_kept_vs_dropped.png";
-
-// Pictures of the report, relative to the report directory, drawn by DrawReportFigures
-// with harness/report_figures.h; the report shows each figure whose file exists (one
-// that could not be drawn is missing, and `scenario run` says why).
-struct PlannedFigure {
-  std::string file;
-  std::string caption;
-};
-std::vector<PlannedFigure> PlannedFigures() {
-  return {{"figures/trajectories_pass1.png",
-           "Top view of pass 1: ground truth and, per mode, the run of median ATE, aligned (as the paper's Fig. 4)"},
-          {"figures/trajectories_pass2.png",
-           "Top view of pass 2, localized on pass 1's map, in pass 1's aligned frame (as the paper's Fig. 4)"},
-          {"figures/error_pass1.png",
-           "Position error of pass 1 frame by frame, for the same runs, after the ATE's alignment: where each "
-           "mode's error builds up"},
-          {"figures/error_pass2.png",
-           "Position error of pass 2 frame by frame, in pass 1's aligned frame as Table III; gaps are frames "
-           "not localized"},
-          {kMaskFigureFile, "Raw vs refined masks of the mutual loop (as the paper's Fig. 5)"},
-          {kFeatureFigureFile, "Matched features kept vs dropped as moving (as the paper's Fig. 6)"}};
-}
-
-// The planned figures whose files exist in the report directory.
-std::vector<PlannedFigure> PresentFigures(const std::filesystem::path& report_dir) {
-  std::vector<PlannedFigure> present;
-  for (const PlannedFigure& figure : PlannedFigures()) {
-    if (!report_dir.empty() && std::filesystem::exists(report_dir / figure.file)) present.push_back(figure);
-  }
-  return present;
-}
-
-// The run of `mode` standing for its mode in the figures: the one whose ATE on `pass` is
-// nearest the median over repeats.
-struct MedianAteRun {
-  const RepeatRun* run = nullptr;
-  const PassEvaluation* pass = nullptr;
-};
-std::optional<MedianAteRun> FindMedianAteRun(const ScenarioReport& report, const std::string& pass,
-                                             const std::string& mode) {
-  const Spread* spread = FindSpread(report.spreads, pass, mode, "ate_rmse_m");
-  if (spread == nullptr) return std::nullopt;
-  std::optional<MedianAteRun> chosen;
-  double best = std::numeric_limits<double>::infinity();
-  for (const RepeatRun& run : report.runs) {
-    if (run.mode != mode) continue;
-    for (const PassEvaluation& evaluation : run.evaluation.passes) {
-      if (evaluation.name != pass || !evaluation.ate_m.has_value()) continue;
-      const double distance = std::abs(evaluation.ate_m->rmse - spread->median);
-      if (distance < best) {
-        best = distance;
-        chosen = MedianAteRun{&run, &evaluation};
-      }
-    }
-  }
-  return chosen;
-}
-
-// The frames of pass 1 the runs processed (--frames limits them).
-int FramesRun(const TumSequence& sequence, const ScenarioReport& report) {
-  const int size = static_cast<int>(sequence.size());
-  return report.frames_per_pass > 0 ? std::min(report.frames_per_pass, size) : size;
-}
-
-std::string StemOf(const TumSequence& sequence, int frame) {
-  return std::filesystem::path(sequence.entries()[static_cast<std::size_t>(frame)].rgb_file).stem().string();
-}
-
-// A frame's masks in the external-mask layout (seg/external_masks.h), as the mutual loop
-// writes its refined masks (on the stored images), in the geometry of the sequence's frames.
-seg::FrameSegmentation ReadMasksInExternalLayout(const TumSequence& sequence, const std::filesystem::path& dir,
-                                                 const std::string& stem, cv::Size frame_size, int frame_index) {
-  const std::filesystem::path png = dir / (stem + ".png");
-  const std::filesystem::path json = dir / (stem + ".json");
-  return seg::ExternalMasksToSegmentation(sequence.LoadInstanceMask(png),
-                                          seg::ParseExternalMaskTable(ReadJsonFile(json), json.string()), frame_size,
-                                          frame_index, png.string());
-}
-
-std::size_t CountInstances(const cv::Mat& ids) {
-  std::set<std::uint16_t> seen;
-  for (int row = 0; row < ids.rows; ++row) {
-    const auto* pixel = ids.ptr<std::uint16_t>(row);
-    for (int col = 0; col < ids.cols; ++col) {
-      if (pixel[col] != 0) seen.insert(pixel[col]);
-    }
-  }
-  return seen.size();
-}
-
-// Fig. 5: ground truth, raw and refined masks of one frame of pass 1 of `run`.
-void DrawMaskFigure(const ScenarioReport& report, const RepeatRun& run, const std::filesystem::path& out) {
-  if (report.bench.segmenter == "gt") throw Error("the mutual mode ran on ground-truth masks: nothing was refined");
-  const std::filesystem::path pass_dir = std::filesystem::path(report.dataset_dir) / "pass1";
-  const std::filesystem::path refined_dir = report.report_dir / run.run_dir / "pass1" / "refined_masks";
-  const TumSequence sequence = TumSequence::Open(pass_dir);
-  const InstanceTable gt_table = InstanceTable::Read(pass_dir / "instances.json");
-  // The raw masks are not saved: the simulated segmenter draws each frame from (seed,
-  // frame index) alone, so with the run's preset and seed it gives again exactly the
-  // masks the loop refined.
-  seg::SimulatedSegmenterOptions preset = seg::SimulatedSegmenterOptions::Preset(report.bench.segmenter);
-  preset.strength = report.bench.segmenter_strength;
-  seg::SimulatedSegmenter segmenter(pass_dir, preset, run.seed, report.bench.segmenter);
-
-  // A dozen evenly spaced candidates keep this cheap on long sequences. The figure should
-  // show refinement at work: frames with two or more ground-truth instances first, then
-  // the largest mIoU gain of refined over raw, then the most instances.
-  constexpr int kCandidates = 12;
-  struct Candidate {
-    RgbdFrame frame;
-    cv::Mat gt_ids;
-    seg::FrameSegmentation raw, refined;
-    bool several_instances = false;
-    double gain = 0;
-    std::size_t instances = 0;
-    bool BetterThan(const Candidate& other) const {
-      return std::tie(several_instances, gain, instances) > std::tie(other.several_instances, other.gain, other.instances);
-    }
-  };
-  std::optional<Candidate> best;
-  const int frames = FramesRun(sequence, report);
-  const int candidates = std::min(kCandidates, frames);
-  for (int c = 0; c < candidates; ++c) {
-    const int i = candidates <= 1 ? 0 : c * (frames - 1) / (candidates - 1);
-    Candidate candidate;
-    candidate.frame = sequence.LoadFrame(static_cast<std::size_t>(i));
-    candidate.frame.index = i;
-    const std::string stem = StemOf(sequence, i);
-    candidate.gt_ids = sequence.LoadInstanceMask(pass_dir / "masks" / (stem + ".png"));
-    candidate.raw = segmenter.Segment(candidate.frame);
-    candidate.refined = ReadMasksInExternalLayout(sequence, refined_dir, stem, candidate.frame.color_bgr.size(), i);
-    const seg::EvaluationOptions scoring;
-    const double raw_miou = seg::SegmentationEvaluator::ScoreFrame(scoring, candidate.gt_ids, gt_table, candidate.raw).mIoU;
-    const double refined_miou =
-        seg::SegmentationEvaluator::ScoreFrame(scoring, candidate.gt_ids, gt_table, candidate.refined).mIoU;
-    // No class in view: nothing to compare, the frame goes last.
-    candidate.gain = std::isnan(raw_miou) || std::isnan(refined_miou) ? -std::numeric_limits<double>::infinity()
-                                                                        : refined_miou - raw_miou;
-    candidate.instances = CountInstances(candidate.gt_ids);
-    candidate.several_instances = candidate.instances >= 2;
-    if (!best.has_value() || candidate.BetterThan(*best)) best = std::move(candidate);
-  }
-  if (!best.has_value()) throw Error("pass 1 of " + run.run_dir + " has no frames");
-  WriteFigure(out, DrawMaskComparison(best->frame.color_bgr, best->gt_ids, gt_table, best->raw, best->refined));
-}
-
-// Fig. 6: the features of one frame of pass 1 of `run`, kept or dropped by the judgement.
-void DrawFeatureFigure(const ScenarioReport& report, const RepeatRun& run, const std::filesystem::path& out) {
-  const std::filesystem::path pass_dir = std::filesystem::path(report.dataset_dir) / "pass1";
-  const TumSequence sequence = TumSequence::Open(pass_dir);
-  // Feature records are not written to disk (they would outweigh the rest of a run), and
-  // keeping every repeat's in memory until the median is known costs more than this: pass
-  // 1 of the chosen run is run again with record_features. SLAM is deterministic given
-  // the segmenter's seed, so this is the same run, frame for frame, and its judgement used
-  // the refined masks the run wrote.
-  SlamRunOptions options;
-  options.mode = slam::SlamMode::kMutual;
-  if (report.bench.segmenter != "gt") options.segmenter = report.bench.segmenter;
-  options.segmenter_seed = run.seed;
-  options.segmenter_strength = report.bench.segmenter_strength;
-  if (!options.segmenter.empty()) options.refiner = report.bench.LoopRefinerOptions();
-  options.max_frames = FramesRun(sequence, report);
-  options.tracker = report.bench.TrackerOverrides();
-  options.tracker.record_features = true;
-  // A minute of SLAM again: Ctrl-C stops it (the scenario run then ends as interrupted).
-  options.on_frame = [](int, int) {
-    if (InterruptRequested()) throw Error("interrupted");
-  };
-  const SlamRunResult rerun = RunSlamOnSequence(sequence, options);
-  const std::optional<std::size_t> chosen = PickFeatureFigureFrame(rerun.frames);
-  if (!chosen.has_value()) throw Error("no frame of pass 1 has feature records");
-  const int frame_index = static_cast<int>(*chosen);
-  const std::string stem = StemOf(sequence, frame_index);
-  const std::filesystem::path judged_masks =
-      options.segmenter.empty() ? pass_dir / "masks" / (stem + ".png")
-                                : report.report_dir / run.run_dir / "pass1" / "refined_masks" / (stem + ".png");
-  const RgbdFrame frame = sequence.LoadFrame(*chosen);
-  const std::string title =
-      fmt::format("{} pass 1, frame {}, mutual{}", report.scenario_name, frame_index,
-                  options.segmenter.empty() ? " on ground-truth masks" : fmt::format(" (seed {})", run.seed));
-  WriteFigure(out, DrawFeatureKinds(frame.color_bgr, sequence.LoadInstanceMask(judged_masks), rerun.frames[*chosen], title));
-}
-
 std::string StatusLine(const ScenarioReport& report) {
   const auto passed = std::count_if(report.checks.begin(), report.checks.end(), [](const auto& c) { return c.passed; });
   std::string line = fmt::format("{} of {} expectations passed", passed, report.checks.size());
@@ -463,245 +231,7 @@ std::string StatusLine(const ScenarioReport& report) {
   return line;
 }
 
-// "name=value" for each leaf of a mapping of options. Nested mappings join their keys
-// with '.', so `orb: {max_features: 1500}` (what --set bench.tracker.orb.max_features
-// writes) and `orb.max_features: 1500` say the same.
-void AppendOptionAssignments(const YAML::Node& options, const std::string& prefix, const std::string& where,
-                             std::vector<std::string>* assignments) {
-  if (!options.IsMap()) throw Error(where + ": expected a mapping of option: value");
-  for (const auto& option : options) {
-    const std::string name = prefix + option.first.Scalar();
-    if (option.second.IsMap()) {
-      AppendOptionAssignments(option.second, name + ".", where, assignments);
-    } else if (option.second.IsScalar()) {
-      assignments->push_back(name + "=" + option.second.Scalar());
-    } else {
-      throw Error(where + ": " + name + ": expected a number");
-    }
-  }
-}
-
 }  // namespace
-
-BenchSettings BenchSettings::FromYaml(const YAML::Node& bench, const std::string& origin) {
-  BenchSettings settings;
-  if (!bench || bench.IsNull()) return settings;
-  if (!bench.IsMap()) throw Error(origin + ": bench: expected a mapping");
-  for (const auto& entry : bench) {
-    const std::string key = entry.first.Scalar();
-    const YAML::Node& value = entry.second;
-    try {
-      if (key == "modes") {
-        settings.modes = value.IsSequence() ? value.as<std::vector<std::string>>() : Split(value.as<std::string>(), ',');
-      } else if (key == "repeats") {
-        settings.repeats = value.as<int>();
-      } else if (key == "segmenter") {
-        settings.segmenter = value.as<std::string>();
-      } else if (key == "segmenter_strength") {
-        settings.segmenter_strength = value.as<double>();
-      } else if (key == "seed") {
-        settings.seed = value.as<std::uint64_t>();
-      } else if (key == "refiner") {
-        AppendOptionAssignments(value, "", origin + ": bench.refiner", &settings.refiner);
-      } else if (key == "tracker") {
-        AppendOptionAssignments(value, "", origin + ": bench.tracker", &settings.tracker);
-      } else {
-        throw Error(origin + ": unknown key 'bench." + key +
-                    "' (known: modes, repeats, segmenter, segmenter_strength, seed, refiner, tracker)");
-      }
-    } catch (const YAML::Exception& e) {
-      throw Error(origin + ": bench." + key + ": " + e.msg);
-    }
-  }
-  const std::string problem = settings.Check();
-  if (!problem.empty()) throw Error(origin + ": bench: " + problem);
-  return settings;
-}
-
-std::string BenchSettings::Check() const {
-  if (modes.empty()) return "modes: at least one of plain, mask-moveable, mutual, oracle";
-  std::set<std::string> seen;
-  for (const std::string& mode : modes) {
-    if (!Contains(slam::SlamModeNames(), mode)) return "modes: unknown mode '" + mode + "' (plain, mask-moveable, mutual or oracle)";
-    if (!seen.insert(mode).second) return "modes: '" + mode + "' twice";
-  }
-  if (repeats < 1) return fmt::format("repeats: must be >= 1 (got {})", repeats);
-  const std::vector<std::string> presets = seg::SimulatedSegmenterOptions::PresetNames();
-  if (segmenter != "gt" && !Contains(presets, segmenter)) {
-    return "segmenter: unknown '" + segmenter + "' (gt or " + Join(presets, ", ") + ")";
-  }
-  if (!(segmenter_strength >= 0 && segmenter_strength <= 10)) {
-    return fmt::format("segmenter_strength: must be in [0, 10] (got {})", segmenter_strength);
-  }
-  if (segmenter == "gt" && segmenter_strength != 1.0) {
-    return "segmenter_strength: scales a simulated segmenter's errors; ground-truth masks (gt) have none";
-  }
-  if (!refiner.empty()) {
-    if (segmenter == "gt") return "refiner: the mutual loop refines a simulated segmenter's masks; ground-truth masks (gt) are not refined";
-    try {
-      std::string problem;
-      if (!LoopRefinerOptions().IsValid(&problem)) return "refiner: " + problem;
-    } catch (const Error& e) {
-      return std::string("refiner: ") + e.what();
-    }
-  }
-  try {
-    TrackerOverrides();
-  } catch (const Error& e) {
-    return std::string("tracker: ") + e.what();
-  }
-  return "";
-}
-
-slam::TrackerOptions BenchSettings::TrackerOverrides() const {
-  slam::TrackerOptions options;
-  for (const std::string& assignment : tracker) slam::SetTrackerOption(&options, assignment);
-  return options;
-}
-
-seg::RefinerOptions BenchSettings::LoopRefinerOptions() const {
-  seg::RefinerOptions options;
-  for (const std::string& assignment : refiner) seg::SetRefinerOption(&options, assignment);
-  return options;
-}
-
-std::string BenchSettings::SegmenterLabel() const {
-  return segmenter == "gt" ? segmenter : SimulatedSegmenterLabel(segmenter, segmenter_strength);
-}
-
-bool BenchSettings::ModeIsDeterministic(const std::string& mode) const {
-  return mode == "plain" || mode == "oracle" || segmenter == "gt";
-}
-
-MetricName ParseMetricName(const std::string& text, const std::vector<std::string>& modes, const std::string& origin) {
-  auto unknown = [&](const std::string& why) {
-    return Error(origin + ": expect: unknown metric '" + PrintableText(text) + "': " + why +
-                 " (names: [pass1.|pass2.]MODE.METRIC or [pass1.|pass2.]MODE_vs_MODE.METRIC_ratio, modes " +
-                 Join(modes, ", ") + ")");
-  };
-  std::vector<std::string> parts = Split(text, '.');
-  MetricName name;
-  name.text = text;
-  if (parts.size() == 3) {
-    if (!Contains(kPasses, parts[0])) throw unknown("'" + parts[0] + "' is not pass1 or pass2");
-    name.pass = parts[0];
-    parts.erase(parts.begin());
-  }
-  if (parts.size() != 2) throw unknown("expected MODE.METRIC");
-  const std::string& subject = parts[0];
-  std::string metric = parts[1];
-  const std::size_t vs = subject.find("_vs_");
-  if (vs != std::string::npos) {
-    name.mode = subject.substr(0, vs);
-    name.denominator_mode = subject.substr(vs + 4);
-    const std::string suffix = "_ratio";
-    if (metric.size() <= suffix.size() || metric.compare(metric.size() - suffix.size(), suffix.size(), suffix) != 0) {
-      throw unknown("a comparison of modes needs a METRIC_ratio, e.g. ate_ratio");
-    }
-    metric = metric.substr(0, metric.size() - suffix.size());
-    if (metric == "ate") metric = "ate_rmse_m";
-    if (!Contains(modes, name.denominator_mode)) throw unknown("mode '" + name.denominator_mode + "' does not run");
-  } else {
-    name.mode = subject;
-  }
-  if (!Contains(modes, name.mode)) throw unknown("mode '" + name.mode + "' does not run");
-  if (!Contains(PassMetricNames(), metric)) {
-    throw unknown("'" + metric + "' is not one of " + Join(PassMetricNames(), ", "));
-  }
-  name.metric = metric;
-  return name;
-}
-
-std::string Expectation::Bounds() const {
-  if (min.has_value() && max.has_value()) return fmt::format("in [{:g}, {:g}]", *min, *max);
-  if (min.has_value()) return fmt::format(">= {:g}", *min);
-  return fmt::format("<= {:g}", *max);
-}
-
-std::vector<Expectation> ParseExpectations(const YAML::Node& expect, const std::vector<std::string>& modes,
-                                           const std::string& origin) {
-  std::vector<Expectation> expectations;
-  if (!expect || expect.IsNull()) return expectations;
-  if (!expect.IsMap()) throw Error(origin + ": expect: expected a mapping of metric: {min: X, max: Y}");
-  for (const auto& entry : expect) {
-    const std::string text = entry.first.Scalar();
-    Expectation expectation;
-    expectation.name = ParseMetricName(text, modes, origin);
-    if (!entry.second.IsMap() || entry.second.size() == 0) {
-      throw Error(origin + ": expect: " + text + ": expected {min: X}, {max: X} or both");
-    }
-    for (const auto& bound : entry.second) {
-      const std::string key = bound.first.Scalar();
-      double value = 0;
-      try {
-        value = bound.second.as<double>();
-      } catch (const YAML::Exception&) {
-        throw Error(origin + ": expect: " + text + "." + key + ": expected a number");
-      }
-      if (!std::isfinite(value)) throw Error(origin + ": expect: " + text + "." + key + ": expected a finite number");
-      if (key == "min") {
-        expectation.min = value;
-      } else if (key == "max") {
-        expectation.max = value;
-      } else {
-        throw Error(origin + ": expect: " + text + ": unknown bound '" + key + "' (min or max)");
-      }
-    }
-    expectations.push_back(expectation);
-  }
-  return expectations;
-}
-
-Spread SpreadOf(std::vector<double> values) {
-  Spread spread;
-  spread.runs = static_cast<int>(values.size());
-  values.erase(std::remove_if(values.begin(), values.end(), [](double v) { return std::isnan(v); }), values.end());
-  spread.count = static_cast<int>(values.size());
-  if (values.empty()) {
-    spread.median = spread.min = spread.max = kNaN;
-    return spread;
-  }
-  spread.median = Median(values);
-  spread.min = *std::min_element(values.begin(), values.end());
-  spread.max = *std::max_element(values.begin(), values.end());
-  return spread;
-}
-
-SpreadTable Summarize(const std::vector<RepeatRun>& runs) {
-  std::map<std::string, std::map<std::string, std::map<std::string, std::vector<double>>>> values;
-  for (const RepeatRun& run : runs) {
-    for (const PassEvaluation& pass : run.evaluation.passes) {
-      for (const auto& [metric, value] : PassMetrics(pass)) values[pass.name][run.mode][metric].push_back(value);
-    }
-  }
-  SpreadTable table;
-  for (const auto& [pass, modes] : values) {
-    for (const auto& [mode, metrics] : modes) {
-      for (const auto& [metric, list] : metrics) table[pass][mode][metric] = SpreadOf(list);
-    }
-  }
-  return table;
-}
-
-std::vector<ExpectationResult> CheckExpectations(const std::vector<Expectation>& expectations, const SpreadTable& table) {
-  std::vector<ExpectationResult> results;
-  for (const Expectation& expectation : expectations) {
-    const MetricName& name = expectation.name;
-    // A run without the value (no ATE after a pass that lost its map, say) fails the
-    // check: the median of the others would hide it.
-    auto median = [&](const std::string& mode) {
-      const Spread* s = FindSpread(table, name.pass, mode, name.metric);
-      return s == nullptr || s->count < s->runs ? kNaN : s->median;
-    };
-    ExpectationResult result;
-    result.expectation = expectation;
-    result.value = name.IsRatio() ? median(name.mode) / median(name.denominator_mode) : median(name.mode);
-    result.passed = std::isfinite(result.value) && (!expectation.min || result.value >= *expectation.min) &&
-                    (!expectation.max || result.value <= *expectation.max);
-    results.push_back(result);
-  }
-  return results;
-}
 
 std::vector<std::string> ModesThatRan(const std::vector<nlohmann::json>& results) {
   std::vector<std::string> modes;
@@ -837,70 +367,6 @@ std::string ScenarioReport::ToText() const {
 }
 
 std::string ScenarioReport::ToHtml() const { return ToDocument().ToHtml(); }
-
-std::vector<std::string> DrawReportFigures(const ScenarioReport& report) {
-  std::vector<std::string> problems;
-  for (const std::string& pass : kPasses) {
-    const std::string file = "figures/trajectories_" + pass + ".png";
-    const std::string error_file = "figures/error_" + pass + ".png";
-    std::string drawing = file;
-    try {
-      NamedTrajectory ground_truth{"ground truth",
-                                   ReadTumTrajectory(std::filesystem::path(report.dataset_dir) / pass / "groundtruth.txt")};
-      std::vector<NamedTrajectory> estimates;
-      for (const std::string& mode : report.bench.modes) {
-        const std::optional<MedianAteRun> chosen = FindMedianAteRun(report, pass, mode);
-        if (!chosen.has_value()) continue;
-        std::vector<StampedPose> poses =
-            ReadTumTrajectory(report.report_dir / chosen->run->run_dir / pass / "trajectory.txt");
-        for (StampedPose& pose : poses) pose.T_wc = chosen->pass->T_gt_est * pose.T_wc;
-        estimates.push_back({report.bench.ModeIsDeterministic(mode) ? mode
-                                                                    : fmt::format("{} (seed {})", mode, chosen->run->seed),
-                             std::move(poses)});
-      }
-      TopViewOptions options;
-      options.title = fmt::format("{} {}: top view", report.scenario_name, pass);
-      std::filesystem::create_directories(report.report_dir / "figures");
-      WriteFigure(report.report_dir / file, DrawTopView(options, ground_truth, estimates).image);
-
-      drawing = error_file;
-      if (ground_truth.poses.size() < 2) throw Error("fewer than two ground-truth poses");
-      std::vector<double> seconds;
-      for (const StampedPose& pose : ground_truth.poses) {
-        seconds.push_back(pose.stamp_s - ground_truth.poses.front().stamp_s);
-      }
-      std::vector<PlotSeries> series;
-      for (const NamedTrajectory& estimate : estimates) {
-        series.push_back({estimate.name, PositionErrorPerFrame(ground_truth.poses, estimate.poses), {}, {}});
-      }
-      LinePlotOptions plot;
-      plot.title = fmt::format("{} {}: position error per frame", report.scenario_name, pass);
-      plot.x_label = "time [s]";
-      plot.y_label = "position error [m]";
-      plot.size = cv::Size(900, 420);
-      plot.markers = false;
-      WriteFigure(report.report_dir / error_file, DrawLinePlot(plot, seconds, series).image);
-    } catch (const Error& e) {
-      problems.push_back(drawing + ": " + e.what());
-    }
-  }
-  // Figs. 5 and 6 show one frame of pass 1 of the mutual run of median ATE. OpenCV and
-  // the rerun may throw more than segslam::Error; a figure is never worth the report.
-  const std::optional<MedianAteRun> mutual = FindMedianAteRun(report, "pass1", "mutual");
-  try {
-    if (!mutual.has_value()) throw Error("the mutual mode did not run (or has no pass-1 ATE)");
-    DrawMaskFigure(report, *mutual->run, report.report_dir / kMaskFigureFile);
-  } catch (const std::exception& e) {
-    problems.push_back(std::string(kMaskFigureFile) + ": " + e.what());
-  }
-  try {
-    if (!mutual.has_value()) throw Error("the mutual mode did not run (or has no pass-1 ATE)");
-    DrawFeatureFigure(report, *mutual->run, report.report_dir / kFeatureFigureFile);
-  } catch (const std::exception& e) {
-    problems.push_back(std::string(kFeatureFigureFile) + ": " + e.what());
-  }
-  return problems;
-}
 
 bool ScenarioReport::Passed() const {
   const bool all_passed = std::all_of(checks.begin(), checks.end(), [](const auto& c) { return c.passed; });

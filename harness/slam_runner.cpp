@@ -26,10 +26,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path StemOf(const TumSequence& sequence, size_t i) {
-  return fs::path(sequence.entries()[i].rgb_file).stem();
-}
-
 // Frames 0, 1, ..., count - 1 of a sequence in order. With `read_ahead`, each is read
 // and decoded on another thread while the one before it is processed: decoding a frame's
 // PNGs is about a sixth of a run's time. A read error is thrown by the Next() that would
@@ -117,8 +113,7 @@ class MaskSource {
       return mutual::ToFrameInstances(segmenter_->Segment(frame), frame.color_bgr.size());
     }
     slam::FrameInstances instances;
-    const fs::path path =
-        sequence_.dir() / "masks" / (StemOf(sequence_, static_cast<size_t>(frame.index)).string() + ".png");
+    const fs::path path = sequence_.dir() / "masks" / (sequence_.FrameStem(static_cast<size_t>(frame.index)) + ".png");
     instances.ids = sequence_.LoadInstanceMask(path);  // Checks its size.
     CheckMaskIds(instances.ids, table_, path.string());
     instances.moveable_ids = moveable_;
@@ -193,15 +188,15 @@ SlamRunResult RunMutualLoop(const TumSequence& sequence, const SlamRunOptions& o
     for (const seg::RegionDecision& decision : step.decisions) {
       ++loop_scores.decision_counts[static_cast<int>(decision.kind)];
     }
-    const fs::path stem = StemOf(sequence, static_cast<size_t>(i));
+    const std::string stem = sequence.FrameStem(static_cast<size_t>(i));
     if (score) {
-      const fs::path gt_path = gt_masks_dir / (stem.string() + ".png");
+      const fs::path gt_path = gt_masks_dir / (stem + ".png");
       const cv::Mat gt_ids = sequence.LoadInstanceMask(gt_path);
       raw_scores.AddFrame(gt_ids, gt_table, step.initial);
       refined_scores.AddFrame(gt_ids, gt_table, step.refined);
     }
     if (!options.refined_masks_dir.empty()) {
-      seg::WriteExternalMaskFiles(options.refined_masks_dir, stem.string(),
+      seg::WriteExternalMaskFiles(options.refined_masks_dir, stem,
                                   sequence.InstanceMaskAsStored(step.refined.ToIdImage(frame.color_bgr.size())),
                                   step.refined);
     }

@@ -15,6 +15,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/json_file.h"
+#include "core/strings.h"
 #include "core/yaml_file.h"
 #include "harness/dataset_run.h"
 #include "harness/report_document.h"
@@ -74,12 +75,6 @@ std::string Spread(const PointValue& v, const char* format) {
   if (v.min != v.max) text += " [" + Cell(v.min, format) + ", " + Cell(v.max, format) + "]";
   if (v.count < v.runs) text += fmt::format(" ({} of {} runs)", v.count, v.runs);
   return text;
-}
-
-std::string Join(const std::vector<std::string>& parts, const std::string& separator) {
-  std::string out;
-  for (const std::string& part : parts) out += (out.empty() ? "" : separator) + part;
-  return out;
 }
 
 struct PlotSpec {

@@ -246,6 +246,8 @@ TEST_F(TumDatasetTest, WriterThenOpenRoundTrip) {
                 0.5 / camera.depth_factor);
   }
   EXPECT_THROW(sequence.LoadFrame(3), Error);
+  EXPECT_EQ(sequence.FrameStem(1), "10.033333");
+  EXPECT_THROW(sequence.FrameStem(3), Error);
 
   // Without associations.txt the lists are associated by timestamp, to the same frames.
   std::filesystem::remove(seq_dir / "associations.txt");

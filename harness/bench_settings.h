@@ -1,0 +1,52 @@
+// The settings of a scenario run: the scenario's `bench:` section (modes, repeats, the
+// simulated segmenter, tracker and refiner overrides), read and checked, and the options
+// they give the runs. Command-line options of `scenario run`, `sweep` and `suite` override
+// it (harness/scenario_runner.h: EffectiveBench).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <yaml-cpp/yaml.h>
+
+#include "seg/refiner.h"
+#include "slam/tracker.h"
+
+namespace segslam::harness {
+
+// The scenario's `bench:` section; command-line options override it.
+struct BenchSettings {
+  std::vector<std::string> modes = slam::PaperModeNames();  // the oracle only when named
+  int repeats = 10;  // runs per mode, differing by the segmenter's seed (the paper: 10)
+  // Simulated segmenter preset (seg/simulated_segmenter.h) for mask-moveable and mutual;
+  // "gt" uses the dataset's ground-truth masks (then every mode is deterministic).
+  std::string segmenter = "fcis-like";
+  // Scales every error of the simulated segmenter: 0 = ground truth, 1 = the preset, 2 =
+  // twice as bad; a sweep axis for segmentation error strength. [0, 10].
+  double segmenter_strength = 1.0;
+  std::uint64_t seed = 1;  // repeat r (0-based) uses seed + r
+  // "name=value" overrides of the mutual loop's refinement (seg/refiner_option_overrides.h),
+  // from `refiner: {name: value, ...}`; a sweep axis as bench.refiner.NAME. Only the loop
+  // refines, so they need a simulated segmenter.
+  std::vector<std::string> refiner;
+  // "name=value" overrides of the tracker (slam/tracker_option_overrides.h) in every
+  // mode, from `tracker: {name: value, ...}`; nested names as orb: {max_features: 1500}
+  // or orb.max_features. A sweep axis as bench.tracker.NAME.
+  std::vector<std::string> tracker;
+
+  // Throws segslam::Error naming `origin` and the key on unknown keys or bad values.
+  static BenchSettings FromYaml(const YAML::Node& bench, const std::string& origin);
+  // Empty when valid, else what is wrong.
+  std::string Check() const;
+  // Without a simulated segmenter SLAM is deterministic: one run says everything.
+  bool ModeIsDeterministic(const std::string& mode) const;
+  // The segmenter as reports name it: "gt", "fcis-like", "fcis-like@2".
+  std::string SegmenterLabel() const;
+  // The refinement options of the mutual loop: the defaults with `refiner` set.
+  seg::RefinerOptions LoopRefinerOptions() const;
+  // The tracker's options: the defaults with `tracker` set.
+  slam::TrackerOptions TrackerOverrides() const;
+};
+
+}  // namespace segslam::harness
