@@ -164,43 +164,54 @@ void WriteRunRecord(const fs::path& dir, const fs::path& dataset, const DatasetR
   WriteFileAtomically(dir / kRunRecordFile, record.dump(2) + "\n");
 }
 
-// A file outside the run's folder (--map-out elsewhere): written under a hidden name beside
-// its place and moved there just before the run's folder is, so that a run that fails
-// leaves neither; removed if never moved.
-class PendingFile {
+fs::path WithPlyExtension(fs::path path) { return path.replace_extension(".ply"); }
+
+// A map outside the run's folder (--map-out elsewhere) and its .ply: written into a hidden
+// folder beside the map and moved to their places just before the run's folder is, so that
+// a run that fails leaves neither; the folder goes in any case. It is named as a staging
+// folder, ".<name>.partial-<pid>@<host>", so that what a killed run left there is cleared
+// by the next run to the same map (core/atomic_file.h's ClearAbandonedStaging).
+class PendingMap {
  public:
-  explicit PendingFile(fs::path target)
+  explicit PendingMap(fs::path target)
       : target_(std::move(target)),
-        pending_(target_.parent_path() /
-                 (".partial-" + std::to_string(static_cast<long>(::getpid())) + "-" + target_.filename().string())) {}
-  PendingFile(const PendingFile&) = delete;
-  PendingFile& operator=(const PendingFile&) = delete;
-  ~PendingFile() {
-    std::error_code ignored;
-    if (!moved_) fs::remove(pending_, ignored);
-  }
-  const fs::path& path() const { return pending_; }
-  void MoveIntoPlace() {
+        folder_(target_.parent_path() / ("." + target_.filename().string() + ".partial-" +
+                                         std::to_string(static_cast<long>(::getpid())) + "@" + StagingHostName())) {
+    ClearAbandonedStaging(target_);
     std::error_code error;
-    fs::rename(pending_, target_, error);
-    if (error) throw FileError(target_, "cannot move the finished file here: " + error.message());
-    moved_ = true;
+    fs::remove_all(folder_, error);
+    if (!fs::create_directory(folder_, error) || error) {
+      throw FileError(target_, "cannot write beside it: " + (error ? error.message() : std::string("unknown reason")));
+    }
+  }
+  PendingMap(const PendingMap&) = delete;
+  PendingMap& operator=(const PendingMap&) = delete;
+  ~PendingMap() {
+    std::error_code ignored;
+    fs::remove_all(folder_, ignored);
+  }
+  // Where the run writes the map; its .ply goes beside it.
+  fs::path path() const { return folder_ / target_.filename(); }
+  void MoveIntoPlace() {
+    for (const auto& [from, to] : {std::make_pair(path(), target_),
+                                   std::make_pair(WithPlyExtension(path()), WithPlyExtension(target_))}) {
+      std::error_code error;
+      fs::rename(from, to, error);
+      if (error) throw FileError(to, "cannot move the finished file here: " + error.message());
+    }
   }
 
  private:
-  fs::path target_, pending_;
-  bool moved_ = false;
+  fs::path target_, folder_;
 };
 
 // Where the long-term map goes while the run is staged: inside the staging folder when it
 // belongs to the run's folder (the default, or --map-out inside --out), else a pending
-// file beside --map-out (with its .ply).
+// folder beside --map-out (with its .ply).
 struct StagedMap {
   fs::path path;  // empty: no map is written
-  std::optional<PendingFile> map, ply;
+  std::optional<PendingMap> pending;
 };
-
-fs::path WithPlyExtension(fs::path path) { return path.replace_extension(".ply"); }
 
 void StageMap(const fs::path& map_out, const fs::path& out_dir, const fs::path& staging_dir, StagedMap* staged) {
   if (map_out.empty()) return;
@@ -218,9 +229,7 @@ void StageMap(const fs::path& map_out, const fs::path& out_dir, const fs::path& 
   const fs::path parent = map_out.parent_path().empty() ? fs::path(".") : map_out.parent_path();
   fs::create_directories(parent, error);
   if (error) throw FileError(parent, "cannot create the folder of --map-out: " + error.message());
-  staged->map.emplace(parent / map_out.filename());
-  staged->ply.emplace(WithPlyExtension(parent / map_out.filename()));
-  staged->path = staged->map->path();
+  staged->path = staged->pending.emplace(parent / map_out.filename()).path();
 }
 
 }  // namespace
@@ -253,8 +262,7 @@ std::vector<PassRun> RunDataset(const fs::path& dataset, const fs::path& out_dir
                                      staging.path(), std::nullopt));
   }
   WriteRunRecord(staging.path(), dataset, options, passes);
-  if (map.map) map.map->MoveIntoPlace();
-  if (map.ply) map.ply->MoveIntoPlace();
+  if (map.pending) map.pending->MoveIntoPlace();
   staging.Commit();
   std::vector<PassRun> result;
   for (auto& [folder, pass] : passes) result.push_back(std::move(pass));

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <filesystem>
@@ -15,6 +16,8 @@
 #include <csignal>
 #include <sys/wait.h>
 #include <unistd.h>
+
+#include "core/atomic_file.h"
 
 namespace {
 
@@ -44,6 +47,21 @@ int LineCount(const std::string& text) {
   int lines = 0;
   for (char c : text) lines += c == '\n';
   return lines;
+}
+
+std::string ReadText(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+// True when `text` holds no byte a terminal would take for a control (C0 or DEL) other
+// than line ends.
+bool HoldsNoControlBytes(const std::string& text) {
+  for (const char c : text) {
+    const auto byte = static_cast<unsigned char>(c);
+    if ((byte < 0x20 && byte != '\n') || byte == 0x7f) return false;
+  }
+  return true;
 }
 
 class CliBadInputTest : public ::testing::Test {
@@ -199,6 +217,39 @@ TEST_F(CliBadInputTest, ExistingOutputIsKeptWithoutForce) {
   EXPECT_TRUE(fs::exists(out / "keep.txt"));
 }
 
+// generate --force replaces only a dataset that segslam wrote (its manifest.json lists
+// every file): it deleted a folder of other files, or a plain file, whatever it held.
+TEST_F(CliBadInputTest, ForceReplacesOnlyADatasetThatSegslamWrote) {
+  const std::string generate = std::string("generate ") + kSmallOffice + " --frames 2 -q --force --out ";
+  const fs::path folder = dir_ / "x";
+  fs::create_directories(folder / "sub");
+  std::ofstream(folder / "sub" / "t.tex") << "precious";
+  const CommandResult refused = RunSegslam(generate + folder.string());
+  EXPECT_EQ(refused.exit_code, 1);
+  EXPECT_EQ(LineCount(refused.stderr_text), 1) << refused.stderr_text;
+  EXPECT_NE(refused.stderr_text.find(folder.string() + ": holds what segslam did not write (no segslam manifest.json)"),
+            std::string::npos)
+      << refused.stderr_text;
+  EXPECT_EQ(ReadText(folder / "sub" / "t.tex"), "precious");
+
+  const fs::path file = dir_ / "file";
+  std::ofstream(file) << "a plain file";
+  const CommandResult plain = RunSegslam(generate + file.string());
+  EXPECT_EQ(plain.exit_code, 1);
+  EXPECT_NE(plain.stderr_text.find(file.string() + ": is a file, not a folder"), std::string::npos) << plain.stderr_text;
+  EXPECT_EQ(ReadText(file), "a plain file");
+
+  // What generate wrote, it replaces.
+  const fs::path dataset = dir_ / "dataset";
+  ASSERT_EQ(RunSegslam(generate + dataset.string()).exit_code, 0);
+  const CommandResult again = RunSegslam(generate + dataset.string());
+  EXPECT_EQ(again.exit_code, 0) << again.stderr_text;
+  EXPECT_TRUE(fs::exists(dataset / "manifest.json"));
+  for (const auto& entry : fs::directory_iterator(dir_)) {
+    EXPECT_EQ(entry.path().filename().string().find(".partial"), std::string::npos) << entry.path();
+  }
+}
+
 // A crowd denser than the streets hold is not refused: generate leaves out the movers
 // that find no path clear of the others, says how many, and records it in the manifest.
 TEST_F(CliBadInputTest, CrowdDenserThanTheStreetsIsThinnedAndSaid) {
@@ -294,6 +345,21 @@ class CliRunBadInputTest : public CliBadInputTest {
         RunSegslam(std::string("generate ") + kSmallOffice + " --out " + dataset.string() + " --frames 3 -q");
     EXPECT_EQ(generated.exit_code, 0) << generated.stderr_text;
     return dataset / "pass1";
+  }
+
+  // A copy of the tiny sequence's dataset (both passes) whose pass 2 cannot be read to its
+  // end: its last depth image is no PNG. Returns the dataset and sets `*broken_file`.
+  fs::path DatasetBrokenInPassTwo(fs::path* broken_file) {
+    if (!fs::exists(dir_ / "dataset")) GenerateTinySequence();
+    const fs::path broken = dir_ / "broken";
+    fs::copy(dir_ / "dataset", broken, fs::copy_options::recursive);
+    fs::path last_depth;
+    for (const auto& entry : fs::directory_iterator(broken / "pass2" / "depth")) {
+      last_depth = std::max(last_depth, entry.path());
+    }
+    std::ofstream(last_depth) << "not a PNG";
+    *broken_file = last_depth;
+    return broken;
   }
 
   void ExpectRunFails(const std::string& arguments, const std::string& fragment) {
@@ -397,6 +463,121 @@ TEST_F(CliRunBadInputTest, EvalRefusesAFrameLogCutShort) {
                                     (run / "trajectory.txt").string() + " says the run read 3"),
             std::string::npos)
       << result.stderr_text;
+}
+
+// run --out naming a file is refused by name and the file kept (it said "cannot remove:
+// Not a directory [FILE/seg.json]").
+TEST_F(CliRunBadInputTest, OutThatIsAFileIsRefusedAndKept) {
+  const fs::path sequence = GenerateTinySequence();
+  const fs::path file = dir_ / "file";
+  std::ofstream(file) << "a plain file";
+  const CommandResult result = RunSegslam("run " + sequence.string() + " -q --out " + file.string());
+  EXPECT_EQ(result.exit_code, 1);
+  EXPECT_EQ(LineCount(result.stderr_text), 1) << result.stderr_text;
+  EXPECT_NE(result.stderr_text.find(file.string() + ": is a file, not a folder (a run output is a folder)"),
+            std::string::npos)
+      << result.stderr_text;
+  EXPECT_EQ(ReadText(file), "a plain file");
+}
+
+// A run's outputs are one unit: a re-run into the same --out that fails in pass 2 leaves
+// the previous output whole (it left the new pass1/ beside the old pass2/, of another
+// mode, and eval scored the mix).
+TEST_F(CliRunBadInputTest, RunFailingInPassTwoLeavesThePreviousOutputWhole) {
+  fs::path last_depth;
+  const fs::path broken = DatasetBrokenInPassTwo(&last_depth);  // pass 1 runs to its end first
+  const fs::path dataset = dir_ / "dataset", run = dir_ / "run";
+  ASSERT_EQ(RunSegslam("run " + dataset.string() + " --mode plain -q --out " + run.string()).exit_code, 0);
+  const std::string pass1 = ReadText(run / "pass1" / "trajectory.txt");
+  const std::string pass2 = ReadText(run / "pass2" / "trajectory.txt");
+  ASSERT_NE(pass1.find("mode plain"), std::string::npos) << pass1;
+
+  const CommandResult failed = RunSegslam("run " + broken.string() + " --mode mask-moveable -q --out " + run.string());
+  EXPECT_EQ(failed.exit_code, 1);
+  EXPECT_NE(failed.stderr_text.find(last_depth.filename().string()), std::string::npos) << failed.stderr_text;
+  EXPECT_EQ(ReadText(run / "pass1" / "trajectory.txt"), pass1);
+  EXPECT_EQ(ReadText(run / "pass2" / "trajectory.txt"), pass2);
+  for (const auto& entry : fs::directory_iterator(dir_)) {
+    EXPECT_EQ(entry.path().filename().string().find(".partial"), std::string::npos) << entry.path();
+  }
+  const CommandResult eval = RunSegslam("eval " + run.string() + " --dataset " + dataset.string());
+  EXPECT_EQ(eval.exit_code, 0) << eval.stderr_text;
+}
+
+// --map-out is part of the run's output: a folder there is refused before any frame (the
+// run failed at its end and left a trajectory.txt and frames.jsonl that looked complete),
+// and a map that cannot be written at the end leaves neither map nor run output.
+TEST_F(CliRunBadInputTest, MapOutThatCannotBeWrittenLeavesNoRunOutput) {
+  const fs::path sequence = GenerateTinySequence();
+  const fs::path folder = dir_ / "maps";
+  fs::create_directories(folder);
+  ExpectRunFails(sequence.string() + " --mode plain --map-out " + folder.string(),
+                 folder.string() + ": is a folder; --map-out takes the path of the map file to write");
+  EXPECT_FALSE(fs::exists(dir_ / "run"));
+
+  // Pass 1's map is written, then pass 2 fails: neither the map nor the run is left.
+  fs::path last_depth;
+  const fs::path broken = DatasetBrokenInPassTwo(&last_depth);
+  const fs::path map = dir_ / "map.segslam";
+  const CommandResult late = RunSegslam("run " + broken.string() + " --mode plain -q --out " +
+                                        (dir_ / "run").string() + " --map-out " + map.string());
+  EXPECT_EQ(late.exit_code, 1);
+  EXPECT_EQ(LineCount(late.stderr_text), 1) << late.stderr_text;
+  EXPECT_NE(late.stderr_text.find(last_depth.filename().string()), std::string::npos) << late.stderr_text;
+  EXPECT_FALSE(fs::exists(dir_ / "run"));
+  EXPECT_FALSE(fs::exists(map));
+  EXPECT_FALSE(fs::exists(dir_ / "map.ply"));
+  for (const auto& entry : fs::directory_iterator(dir_)) {
+    EXPECT_EQ(entry.path().filename().string().find(".partial"), std::string::npos) << entry.path();
+  }
+}
+
+// A run killed while its map waited beside --map-out (all of pass 2, for a dataset's two
+// passes) left hidden files there that nothing removed; the next run to that map clears
+// what ended processes of this host left, and keeps another host's.
+TEST_F(CliRunBadInputTest, MapOutLeftoversOfAKilledRunAreCleared) {
+  const fs::path sequence = GenerateTinySequence();
+  const fs::path maps = dir_ / "maps";
+  fs::create_directories(maps);
+  // The map and its .ply wait in a hidden folder named after the map, as a staging folder.
+  const std::string dead = ".m.segslam.partial-2147483000@";  // above any pid_max: no process has it
+  const std::string host = segslam::StagingHostName();
+  for (const fs::path& folder : {maps / (dead + host), maps / (dead + "not-" + host)}) {
+    fs::create_directories(folder);
+    std::ofstream(folder / "m.segslam") << "a killed run's";
+    std::ofstream(folder / "m.ply") << "a killed run's";
+  }
+  const fs::path other_host = maps / (dead + "not-" + host);
+  const CommandResult result = RunSegslam("run " + sequence.string() + " --mode plain -q --out " +
+                                          (dir_ / "run").string() + " --map-out " + (maps / "m.segslam").string());
+  ASSERT_EQ(result.exit_code, 0) << result.stderr_text;
+  std::vector<std::string> names;
+  for (const auto& entry : fs::directory_iterator(maps)) names.push_back(entry.path().filename().string());
+  std::sort(names.begin(), names.end());
+  EXPECT_EQ(names, (std::vector<std::string>{other_host.filename().string(), "m.ply", "m.segslam"}));
+}
+
+// File text that reaches a message unquoted (a mode a scenario names, an image path that
+// associations.txt lists) comes out with its control bytes escaped, so that a file's
+// bytes cannot clear the terminal; a folder's UTF-8 name stays as it is.
+TEST_F(CliRunBadInputTest, FileTextInAMessageCannotControlTheTerminal) {
+  const fs::path scenario =
+      WriteScenario("modes.yaml", ReadText(kSmallOffice) + "bench: {modes: [\"\\e[2Jplain\"]}\n");
+  const CommandResult mode = RunSegslam("scenario run " + scenario.string() + " -q --cache " +
+                                        (dir_ / "cache").string() + " --out " + (dir_ / "report").string());
+  EXPECT_EQ(mode.exit_code, 1);
+  EXPECT_NE(mode.stderr_text.find("unknown mode '\\x1b[2Jplain'"), std::string::npos) << mode.stderr_text;
+  EXPECT_TRUE(HoldsNoControlBytes(mode.stderr_text)) << mode.stderr_text;
+
+  const fs::path sequence = dir_ / "s\u00e9quence";
+  fs::copy(GenerateTinySequence(), sequence, fs::copy_options::recursive);
+  std::ofstream(sequence / "associations.txt") << "0.000000 rgb/\x1b[2J\xff.png 0.000000 depth/0.000000.png\n";
+  const CommandResult listed = RunSegslam("run " + sequence.string() + " --mode plain -q --out " + (dir_ / "run").string());
+  EXPECT_EQ(listed.exit_code, 1);
+  EXPECT_NE(listed.stderr_text.find(sequence.string() + "/rgb/\\x1b[2J\\xff.png: image file listed in the sequence"),
+            std::string::npos)
+      << listed.stderr_text;
+  EXPECT_TRUE(HoldsNoControlBytes(listed.stderr_text)) << listed.stderr_text;
 }
 
 // --refiner tunes the mutual loop's refinement: where no loop runs it would do nothing.

@@ -10,6 +10,7 @@
 #include <fstream>
 #include <string>
 
+#include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/manifest.h"
 #include "tests/core/test_util.h"
@@ -92,6 +93,21 @@ TEST_F(DatasetCacheTest, AMissingCacheListsNothingAndAnUnreadableRecordCountsAsN
   ASSERT_EQ(entries.size(), 1u);
   EXPECT_EQ(entries[0].code_version, "");
   EXPECT_TRUE(IsStale(entries[0], "v2"));
+}
+
+// A generation killed in the cache leaves .<name>-<key>.partial-<pid>@<host>: prune-cache
+// lists it once its process on this host has ended; one of another host sharing the
+// cache, or of a process still at work, is left alone.
+TEST_F(DatasetCacheTest, LeftoversOfEndedProcessesOfThisHostOnlyAreListed) {
+  const std::string host = StagingHostName();
+  const std::string dead_pid = "2147483000";  // above any pid_max: no process has it
+  MakeDataset(".office-0123456789ab.partial-" + dead_pid + "@" + host);
+  MakeDataset(".office-0123456789ab.partial-" + dead_pid + "@not-" + host);
+  MakeDataset(".office-0123456789ab.partial-" + std::to_string(::getpid()) + "@" + host);
+  const std::vector<CachedDataset> entries = ListDatasetCache(cache_);
+  ASSERT_EQ(entries.size(), 1u);
+  EXPECT_EQ(entries[0].dir.filename(), ".office-0123456789ab.partial-" + dead_pid + "@" + host);
+  EXPECT_TRUE(entries[0].leftover);
 }
 
 // A cached dataset is checked against its manifest.json before reuse: sizes every time,

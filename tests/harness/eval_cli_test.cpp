@@ -152,4 +152,37 @@ TEST_F(EvalCliTest, RunOfAnotherSequenceIsRefused) {
   EXPECT_NE(eval.stderr_text.find("run and dataset do not match"), std::string::npos) << eval.stderr_text;
 }
 
+// Two generated worlds of one frame rate share every stamp: a run of one office world was
+// scored against another's dataset (ATE 0.064 m for a true 0.0047 m). A run records the
+// first colour file it read and its SHA-256 (run.json), and eval refuses another sequence.
+TEST_F(EvalCliTest, RunOfAnotherWorldWithTheSameStampsIsRefused) {
+  const fs::path scenario = fs::path(SEGSLAM_SOURCE_DIR) / "scenarios" / "test" / "office_small.yaml";
+  const fs::path world_a = dir_ / "world_a", world_b = dir_ / "world_b";
+  ASSERT_EQ(Run("generate " + scenario.string() + " --frames 5 -q --out " + world_a.string()).exit_code, 0);
+  ASSERT_EQ(Run("generate " + scenario.string() + " --frames 5 -q --set seed=9 --out " + world_b.string()).exit_code, 0);
+  ASSERT_EQ(ReadText(world_a / "pass1" / "associations.txt"), ReadText(world_b / "pass1" / "associations.txt"));
+
+  const fs::path run_dir = dir_ / "run";
+  const CommandOutput run = Run("run " + (world_a / "pass1").string() + " --mode plain -q --out " + run_dir.string());
+  ASSERT_EQ(run.exit_code, 0) << run.stderr_text;
+  const CommandOutput own = Run("eval " + run_dir.string() + " --dataset " + (world_a / "pass1").string());
+  EXPECT_EQ(own.exit_code, 0) << own.stderr_text;
+  const CommandOutput other = Run("eval " + run_dir.string() + " --dataset " + (world_b / "pass1").string());
+  EXPECT_EQ(other.exit_code, 1);
+  EXPECT_EQ(LineCount(other.stderr_text), 1) << other.stderr_text;
+  EXPECT_NE(other.stderr_text.find("eval: " + run_dir.string() + " is a run of " + (world_a / "pass1").string() +
+                                   ", not of " + (world_b / "pass1").string() +
+                                   ": the first colour frame it read, rgb/0.000000.png, differs from"),
+            std::string::npos)
+      << other.stderr_text;
+
+  // Both passes of a generated dataset: each pass is checked.
+  const CommandOutput both = Run("run " + world_a.string() + " --mode plain -q --out " + run_dir.string());
+  ASSERT_EQ(both.exit_code, 0) << both.stderr_text;
+  const CommandOutput other_both = Run("eval " + run_dir.string() + " --dataset " + world_b.string());
+  EXPECT_EQ(other_both.exit_code, 1);
+  EXPECT_NE(other_both.stderr_text.find("is a run of " + (world_a / "pass1").string()), std::string::npos)
+      << other_both.stderr_text;
+}
+
 }  // namespace

@@ -181,6 +181,39 @@ TEST_F(MasksCliTest, ExportAndImportAreInverse) {
   EXPECT_NE(neither.stderr_text.find("either --masks DIR or --segmenter PRESET"), std::string::npos);
 }
 
+// import --force replaces only a folder of masks that segslam wrote (its record
+// segslam_sequence.json and the masks): it deleted a folder of other files whatever it held.
+TEST_F(MasksCliTest, ForceReplacesOnlyAFolderOfMasksThatSegslamWrote) {
+  ASSERT_TRUE(fs::is_directory(sequence_)) << sequence_;
+  const fs::path image_list = dir_ / "images.json", results_file = dir_ / "results.json";
+  ASSERT_EQ(Run("masks images " + sequence_.string() + " --out " + image_list.string()).exit_code, 0);
+  std::ofstream(results_file) << R"([{"image_id": 1, "category_id": 1, "score": 0.9,
+                                      "segmentation": {"size": [480, 640], "counts": [1000, 500, 305700]}}])";
+  const std::string import = "masks import " + sequence_.string() + " " + results_file.string() + " --images " +
+                             image_list.string() + " -q --force --out ";
+
+  const fs::path notes = dir_ / "notes";
+  fs::create_directories(notes / "sub");
+  std::ofstream(notes / "sub" / "t.tex") << "precious";
+  std::ofstream(notes / "0.000000.png") << "a picture of mine";
+  const CommandOutput refused = Run(import + notes.string());
+  EXPECT_EQ(refused.exit_code, 1);
+  EXPECT_NE(refused.stderr_text.find(notes.string() + ": holds what segslam did not write"), std::string::npos)
+      << refused.stderr_text;
+  EXPECT_EQ(ReadText(notes / "sub" / "t.tex"), "precious");
+  EXPECT_EQ(ReadText(notes / "0.000000.png"), "a picture of mine");
+
+  // What import wrote, it replaces.
+  const fs::path masks = dir_ / "masks";
+  ASSERT_EQ(Run(import + masks.string()).exit_code, 0);
+  const CommandOutput again = Run(import + masks.string());
+  EXPECT_EQ(again.exit_code, 0) << again.stderr_text;
+  EXPECT_TRUE(fs::exists(masks / "segslam_sequence.json"));
+  for (const auto& entry : fs::directory_iterator(dir_)) {
+    EXPECT_EQ(entry.path().filename().string().find(".partial"), std::string::npos) << entry.path();
+  }
+}
+
 TEST_F(MasksCliTest, RefusedInputLeavesNoFolder) {
   ASSERT_TRUE(fs::is_directory(sequence_)) << sequence_;
   // Integer image ids without the image list they refer to.

@@ -89,6 +89,31 @@ TEST_F(ScenarioCliTest, OutFolderOfOtherFilesIsRefusedAndKept) {
   EXPECT_FALSE(fs::exists(dir_ / "cache"));
 }
 
+// --junit names the XML file to write: an empty folder there was removed and the file
+// written in its place, a folder of files gave a raw filesystem message at the end. Both
+// are refused before any work, the folder kept.
+TEST_F(ScenarioCliTest, JunitPathThatIsAFolderIsRefusedAndKept) {
+  for (const bool empty : {true, false}) {
+    const fs::path folder = dir_ / (empty ? "empty" : "full");
+    fs::create_directories(folder);
+    if (!empty) std::ofstream(folder / "other.xml") << "<kept/>";
+    const CommandOutput result =
+        Run("scenario run " + kSmallOffice.string() + " --frames 3 --modes plain --repeats 1 -q --cache " +
+            (dir_ / "cache").string() + " --out " + (dir_ / "report").string() + " --junit " + folder.string());
+    EXPECT_EQ(result.exit_code, 1);
+    EXPECT_EQ(LineCount(result.stderr_text), 1) << result.stderr_text;
+    EXPECT_NE(result.stderr_text.find(folder.string() + ": is a folder; --junit takes the path of the JUnit XML file"),
+              std::string::npos)
+        << result.stderr_text;
+    EXPECT_TRUE(fs::is_directory(folder));
+    if (!empty) {
+      EXPECT_EQ(ReadText(folder / "other.xml"), "<kept/>");
+    }
+  }
+  EXPECT_FALSE(fs::exists(dir_ / "cache"));
+  EXPECT_FALSE(fs::exists(dir_ / "report"));
+}
+
 // A cached dataset whose files changed since generation is not used as the scenario's:
 // a depth image edited in place (its size kept) is found by its SHA-256 on the next
 // process's first use, and the dataset is generated anew.
