@@ -5,6 +5,7 @@
 #include <cstdio>
 
 int main(int argc, char** argv) {
+#ifndef __SANITIZE_ADDRESS__  // AddressSanitizer's allocator replaces glibc's and has no such thresholds.
   // Every frame allocates and frees several image-sized buffers (rendering, noise, PNG
   // encoding). With glibc's default thresholds each is a fresh mmap whose pages fault
   // in again on every frame: a fifth of generation time went to page faults. Keeping
@@ -18,5 +19,6 @@ int main(int argc, char** argv) {
   } else if (mallopt(M_TRIM_THRESHOLD, 256 << 20) != 1) {
     std::fprintf(stderr, "segslam: warning: mallopt(M_TRIM_THRESHOLD) refused\n");
   }
+#endif
   return segslam::harness::RunCli(argc, argv);
 }
