@@ -184,9 +184,11 @@ std::vector<TumFrameEntry> AssociateByTimestamp(
   for (size_t i = 0; i < rgb.size(); ++i) {
     const double a = rgb[i].first;
     // A window twice as wide as the test, so that rounding of a +- max_difference_s at
-    // large stamps (1.3e9 s) cannot cut off a pair whose difference passes the test.
+    // large stamps (1.3e9 s) cannot cut off a pair whose difference passes the test; its
+    // end is inclusive, since at stamps beyond about 1e15 s a + 2 * max_difference_s
+    // rounds to a itself.
     auto it = std::lower_bound(depth_sorted.begin(), depth_sorted.end(), a - 2 * max_difference_s);
-    for (; it != depth_sorted.end() && *it < a + 2 * max_difference_s; ++it) {
+    for (; it != depth_sorted.end() && *it <= a + 2 * max_difference_s; ++it) {
       const double diff = std::abs(a - *it);
       if (diff < max_difference_s) {
         const size_t k = static_cast<size_t>(it - depth_sorted.begin());

@@ -164,6 +164,14 @@ TEST(AssociateByTimestamp, PairsJustUnderTheLimitAtLargeStamps) {
   EXPECT_EQ(AssociateByTimestamp(depth, rgb, 0.02).size(), 1u);
 }
 
+// Where a stamp is so large that a + 0.04 rounds to a (beyond about 1e15 s), equal
+// stamps still pair: a list associated with itself keeps every frame (found by the
+// fuzz target fuzz_tum_lists).
+TEST(AssociateByTimestamp, EqualStampsPairWhereTheWindowRoundsAway) {
+  const std::vector<std::pair<double, std::string>> list = {{7.7e20, "rgb/a.png"}, {7.8e20, "rgb/b.png"}};
+  EXPECT_EQ(AssociateByTimestamp(list, list, 0.02).size(), 2u);
+}
+
 // yaml-cpp's own exceptions used to escape (an "internal error" naming no file), and
 // of a repeated key the first was taken silently.
 TEST_F(TumDatasetTest, CameraYamlRefusesNonScalarAndDuplicateKeysNamingFileAndKey) {
