@@ -167,7 +167,7 @@ int RunBenchSlam(const BenchSlamArgs& args) {
   if (!run.refine_ms.empty()) stages.emplace_back("mask refinement", run.refine_ms);
   // Per-frame times depend on the CPU (1.7x apart on two machines of the same kind): name it.
   const nlohmann::json machine = MachineDescription();
-  const std::string masks = options.mode == slam::SlamMode::kPlain ? "none"
+  const std::string masks = options.mode == mutual::SlamMode::kPlain ? "none"
                             : !args.run.segmenter.empty()           ? "segmenter " + args.run.segmenter
                                                                     : args.run.masks;
   fmt::print("sequence {} ({}x{}), mode {}, masks {}, {} frames, {} features requested, one core of {}\n",
@@ -226,7 +226,7 @@ void AddBenchCommand(CLI::App& app, std::function<int()>* action) {
                    "A TUM-layout sequence (with masks/ for mutual and mask-moveable, unless --masks names a folder)")
       ->required();
   slam->add_option("--mode", slam_args->run.mode, "plain, mask-moveable, mutual or oracle")
-      ->check(CLI::IsMember(slam::SlamModeNames()))
+      ->check(CLI::IsMember(mutual::SlamModeNames()))
       ->capture_default_str();
   slam->add_option("--frames", slam_args->run.frames, "Only the first N frames (0 = all)")
       ->check(WholeNumberIn(0, kMaxFrames, "0 = all"));

@@ -76,7 +76,7 @@ std::string BenchSettings::Check() const {
   if (modes.empty()) return "modes: at least one of plain, mask-moveable, mutual, oracle";
   std::set<std::string> seen;
   for (const std::string& mode : modes) {
-    if (!Contains(slam::SlamModeNames(), mode)) return "modes: unknown mode '" + mode + "' (plain, mask-moveable, mutual or oracle)";
+    if (!Contains(mutual::SlamModeNames(), mode)) return "modes: unknown mode '" + mode + "' (plain, mask-moveable, mutual or oracle)";
     if (!seen.insert(mode).second) return "modes: '" + mode + "' twice";
   }
   if (repeats < 1) return fmt::format("repeats: must be >= 1 (got {})", repeats);

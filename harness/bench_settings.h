@@ -10,6 +10,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "mutual/slam_mode.h"
 #include "seg/refiner.h"
 #include "slam/tracker.h"
 
@@ -17,7 +18,7 @@ namespace segslam::harness {
 
 // The scenario's `bench:` section; command-line options override it.
 struct BenchSettings {
-  std::vector<std::string> modes = slam::PaperModeNames();  // the oracle only when named
+  std::vector<std::string> modes = mutual::PaperModeNames();  // the oracle only when named
   int repeats = 10;  // runs per mode, differing by the segmenter's seed (the paper: 10)
   // Simulated segmenter preset (seg/simulated_segmenter.h) for mask-moveable and mutual;
   // "gt" uses the dataset's ground-truth masks (then every mode is deterministic).

@@ -105,7 +105,7 @@ bool RunsMutualLoop(const DatasetRunOptions& options) {
 
 SlamRunOptions SlamRunOptionsFor(const DatasetRunOptions& options) {
   SlamRunOptions slam_options;
-  slam_options.mode = slam::ParseSlamMode(options.mode);
+  slam_options.mode = mutual::ParseSlamMode(options.mode);
   slam_options.masks = options.masks;
   slam_options.segmenter = options.segmenter;
   slam_options.segmenter_seed = options.seed;
@@ -123,7 +123,7 @@ SlamRunOptions SlamRunOptionsFor(const DatasetRunOptions& options) {
 }
 
 void CheckDatasetRunOptions(const DatasetRunOptions& options) {
-  slam::ParseSlamMode(options.mode);
+  mutual::ParseSlamMode(options.mode);
   slam::TrackerOptions tracker;
   for (const std::string& assignment : options.tracker_options) slam::SetTrackerOption(&tracker, assignment);
   if (!options.segmenter.empty() && options.masks != "gt") {

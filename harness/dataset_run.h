@@ -26,7 +26,7 @@
 namespace segslam::harness {
 
 struct DatasetRunOptions {
-  std::string mode = "mutual";  // plain, mask-moveable, mutual or oracle (slam::ParseSlamMode)
+  std::string mode = "mutual";  // plain, mask-moveable, mutual or oracle (mutual::ParseSlamMode)
   std::string masks = "gt";     // "gt" or a folder of external masks
   std::string segmenter;        // simulated segmenter preset; empty = none
   std::uint64_t seed = 1;       // the simulated segmenter's seed

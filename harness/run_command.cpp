@@ -149,7 +149,7 @@ void AddRunCommand(CLI::App& app, std::function<int()>* action) {
       "run", "Run the SLAM core on a sequence (TUM layout), or on both passes of a generated dataset");
   cmd->add_option("dataset", args->dataset, "A TUM-layout sequence, or a dataset with pass1/ and pass2/")
       ->required();
-  // Checked by slam::ParseSlamMode, whose error is one line like every other.
+  // Checked by mutual::ParseSlamMode, whose error is one line like every other.
   cmd->add_option("--mode", args->run.mode,
                   "plain, mask-moveable, mutual, or oracle (mutual with the true moving/static verdicts of a "
                   "generated dataset, for reference)");

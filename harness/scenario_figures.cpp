@@ -152,7 +152,7 @@ void DrawFeatureFigure(const ScenarioReport& report, const RepeatRun& run, const
   // the segmenter's seed, so this is the same run, frame for frame, and its judgement used
   // the refined masks the run wrote.
   SlamRunOptions options;
-  options.mode = slam::SlamMode::kMutual;
+  options.mode = mutual::SlamMode::kMutual;
   if (report.bench.segmenter != "gt") options.segmenter = report.bench.segmenter;
   options.segmenter_seed = run.seed;
   options.segmenter_strength = report.bench.segmenter_strength;

@@ -13,6 +13,7 @@
 #include "harness/map_relative_error.h"
 #include "harness/run_evaluation.h"
 #include "harness/scenario_figures.h"
+#include "mutual/slam_mode.h"
 
 namespace segslam::harness {
 
@@ -235,7 +236,7 @@ std::string StatusLine(const ScenarioReport& report) {
 
 std::vector<std::string> ModesThatRan(const std::vector<nlohmann::json>& results) {
   std::vector<std::string> modes;
-  for (const std::string& mode : slam::SlamModeNames()) {
+  for (const std::string& mode : mutual::SlamModeNames()) {
     for (const nlohmann::json& r : results) {
       const nlohmann::json ran = r.contains("bench") ? r["bench"].value("modes", nlohmann::json::array())
                                                      : nlohmann::json::array();

@@ -53,7 +53,7 @@ struct ScenarioReport {
   std::string ToJUnitXml() const;
 };
 
-// The modes, in the paper's order (slam::SlamModeNames), that ran in any of these
+// The modes, in the paper's order (mutual::SlamModeNames), that ran in any of these
 // results.json documents (ScenarioReport::ToJson); one without a bench section ran none.
 std::vector<std::string> ModesThatRan(const std::vector<nlohmann::json>& results);
 

@@ -2,22 +2,18 @@
 
 #include <algorithm>
 #include <future>
-#include <map>
 #include <memory>
 #include <optional>
 #include <sstream>
-#include <unordered_set>
 
 #include <nlohmann/json.hpp>
 
 #include "core/atomic_file.h"
-#include "core/coco.h"
 #include "core/error.h"
-#include "core/image_io.h"
 #include "core/instances.h"
 #include "core/statistics.h"
-#include "core/tracks.h"
 #include "seg/external_masks.h"
+#include "seg/ground_truth.h"
 #include "seg/simulated_segmenter.h"
 
 namespace segslam::harness {
@@ -58,8 +54,9 @@ class FrameReader {
 };
 
 // The segmenter the run's options name: the simulated one, an external masks folder, or
-// none (nullptr) for the dataset's ground-truth masks.
+// the dataset's ground-truth masks; none in plain mode.
 std::unique_ptr<seg::Segmenter> MakeSegmenter(const TumSequence& sequence, const SlamRunOptions& options) {
+  if (!mutual::UsesMasks(options.mode)) return nullptr;
   if (!options.segmenter.empty()) {
     if (options.masks != "gt") {
       throw Error("run: --segmenter " + options.segmenter + " and --masks " + options.masks +
@@ -74,147 +71,36 @@ std::unique_ptr<seg::Segmenter> MakeSegmenter(const TumSequence& sequence, const
     return std::make_unique<seg::ExternalMaskSegmenter>(options.masks, sequence,
                                                         static_cast<size_t>(std::max(0, options.max_frames)));
   }
-  return nullptr;
+  return std::make_unique<seg::GroundTruthSegmenter>(sequence);
 }
 
-// The instance masks of each frame as SLAM takes them, unrefined: the dataset's ground
-// truth, or a segmenter's raw output. For the oracle, the ground truth's moving
-// instances too.
-class MaskSource {
+// Raw and refined masks of the mutual loop against the sequence's ground truth, where it
+// has one (a generated sequence; not a real TUM one).
+class LoopSegmentationScorer {
  public:
-  MaskSource(const TumSequence& sequence, const SlamRunOptions& options)
-      : sequence_(sequence), segmenter_(MakeSegmenter(sequence, options)) {
-    if (segmenter_ != nullptr) return;
+  explicit LoopSegmentationScorer(const TumSequence& sequence) : sequence_(sequence) {
     const fs::path table = sequence.dir() / "instances.json";
-    if (!fs::exists(table)) {
-      throw FileError(table, "missing: ground-truth masks need the dataset's instance table "
-                             "(or give --masks DIR with external masks)");
-    }
+    if (!fs::exists(table) || !fs::is_directory(sequence.dir() / "masks")) return;
     table_ = InstanceTable::Read(table);
-    for (const InstanceInfo& info : table_.instances()) {
-      if (info.moveable) moveable_.insert(info.id);
-    }
-    if (options.mode == slam::SlamMode::kOracle) {
-      const fs::path tracks = sequence.dir() / "tracks.json";
-      if (!fs::exists(tracks)) {
-        throw FileError(tracks, "missing: mode oracle takes which instances move from the ground-truth tracks");
-      }
-      moving_by_frame_.emplace();
-      for (const ObjectTrack& track : ReadTracks(tracks)) {
-        for (const TrackSample& sample : track.samples) {
-          if (sample.moving) (*moving_by_frame_)[sample.frame].insert(track.instance_id);
-        }
-      }
-    }
+    enabled_ = true;
   }
-
-  slam::FrameInstances Load(const RgbdFrame& frame) {
-    if (segmenter_ != nullptr) {
-      return mutual::ToFrameInstances(segmenter_->Segment(frame), frame.color_bgr.size());
-    }
-    slam::FrameInstances instances;
-    const fs::path path = sequence_.dir() / "masks" / (sequence_.FrameStem(static_cast<size_t>(frame.index)) + ".png");
-    instances.ids = sequence_.LoadInstanceMask(path);  // Checks its size.
-    CheckMaskIds(instances.ids, table_, path.string());
-    instances.moveable_ids = moveable_;
-    if (moving_by_frame_.has_value()) {
-      const auto moving = moving_by_frame_->find(frame.index);
-      instances.known_moving_ids = moving != moving_by_frame_->end() ? moving->second
-                                                                     : std::unordered_set<std::uint16_t>{};
-    }
-    return instances;
+  void Add(const mutual::FrameStep& step, int frame_index) {
+    if (!enabled_) return;
+    const fs::path gt_path = sequence_.dir() / "masks" / (sequence_.FrameStem(static_cast<size_t>(frame_index)) + ".png");
+    const cv::Mat gt_ids = sequence_.LoadInstanceMask(gt_path);
+    raw_.AddFrame(gt_ids, table_, step.initial);
+    refined_.AddFrame(gt_ids, table_, step.refined);
   }
+  bool enabled() const { return enabled_; }
+  seg::SegmentationScores raw() const { return raw_.Scores(); }
+  seg::SegmentationScores refined() const { return refined_.Scores(); }
 
  private:
   const TumSequence& sequence_;
-  std::unique_ptr<seg::Segmenter> segmenter_;
+  bool enabled_ = false;
   InstanceTable table_;
-  std::unordered_set<std::uint16_t> moveable_;
-  // Oracle mode: frame index -> instances that moved since the frame before.
-  std::optional<std::map<int, std::unordered_set<std::uint16_t>>> moving_by_frame_;
+  seg::SegmentationEvaluator raw_, refined_;
 };
-
-
-// A map reset voids the poses of the frames before it: they are in the frame of a map
-// that no longer exists, so they count as lost, as ORB-SLAM2 forgets them.
-void AddFrame(const slam::FrameResult& frame, SlamRunResult* result) {
-  if (frame.map_reset) {
-    for (slam::FrameResult& earlier : result->frames) earlier.status = slam::TrackingStatus::kLost;
-    result->trajectory.clear();
-  }
-  if (frame.localized()) result->trajectory.push_back({frame.stamp_s, frame.T_wc});
-  result->frames.push_back(frame);
-}
-
-// Mutual mode with a segmenter: the paper's loop, refined masks written and scored.
-SlamRunResult RunMutualLoop(const TumSequence& sequence, const SlamRunOptions& options) {
-  const std::unique_ptr<seg::Segmenter> segmenter = MakeSegmenter(sequence, options);
-  mutual::MutualLoopOptions loop_options;
-  loop_options.tracker = options.tracker;
-  loop_options.refiner = options.refiner;
-  mutual::MutualLoop loop(sequence.camera().intrinsics, *segmenter, loop_options);
-  if (!options.map_in.empty()) {
-    loop.LoadLongTermMap(slam::LoadLongTermMap(options.map_in), options.map_in.string());
-  }
-
-  // Scored when the sequence has ground-truth masks (a generated one; not a real TUM one).
-  const fs::path gt_table_path = sequence.dir() / "instances.json";
-  const fs::path gt_masks_dir = sequence.dir() / "masks";
-  const bool score = fs::exists(gt_table_path) && fs::is_directory(gt_masks_dir);
-  InstanceTable gt_table;
-  if (score) gt_table = InstanceTable::Read(gt_table_path);
-  seg::SegmentationEvaluator raw_scores, refined_scores;
-  LoopSegmentationScores loop_scores;
-  loop_scores.segmenter = segmenter->name();
-
-  if (!options.refined_masks_dir.empty()) {
-    std::error_code error;
-    fs::create_directories(options.refined_masks_dir, error);
-    if (error) throw FileError(options.refined_masks_dir, "cannot create: " + error.message());
-    seg::WriteMaskFolderRecord(options.refined_masks_dir, sequence);
-  }
-
-  SlamRunResult result;
-  const int total = options.max_frames > 0 ? std::min<int>(options.max_frames, static_cast<int>(sequence.size()))
-                                           : static_cast<int>(sequence.size());
-  FrameReader frames(sequence, total, options.read_ahead);
-  for (int i = 0; i < total; ++i) {
-    RgbdFrame frame = frames.Next();
-    frame.index = i;
-    const mutual::MutualFrameResult step = loop.ProcessFrame(frame);
-    AddFrame(step.slam, &result);
-    result.refine_ms.push_back(step.refine_ms);
-    loop_scores.refined_from_previous += step.refined_from_previous;
-    for (const seg::RegionDecision& decision : step.decisions) {
-      ++loop_scores.decision_counts[static_cast<int>(decision.kind)];
-    }
-    const std::string stem = sequence.FrameStem(static_cast<size_t>(i));
-    if (score) {
-      const fs::path gt_path = gt_masks_dir / (stem + ".png");
-      const cv::Mat gt_ids = sequence.LoadInstanceMask(gt_path);
-      raw_scores.AddFrame(gt_ids, gt_table, step.initial);
-      refined_scores.AddFrame(gt_ids, gt_table, step.refined);
-    }
-    if (!options.refined_masks_dir.empty()) {
-      seg::WriteExternalMaskFiles(options.refined_masks_dir, stem,
-                                  sequence.InstanceMaskAsStored(step.refined.ToIdImage(frame.color_bgr.size())),
-                                  step.refined);
-    }
-    if (options.on_frame) options.on_frame(i + 1, total);
-  }
-  if (score) {
-    loop_scores.raw = raw_scores.Scores();
-    loop_scores.refined = refined_scores.Scores();
-    loop_scores.refine_ms_median = result.refine_ms.empty() ? 0 : Median(result.refine_ms);
-    result.segmentation = std::move(loop_scores);
-  }
-  result.long_term_map = loop.tracker().ExportLongTermMap(false);
-  result.long_term_map.description = "segslam long-term map of " + sequence.dir().string() + ", mode mutual, " +
-                                     "segmenter " + segmenter->name();
-  result.keyframes = static_cast<int>(loop.tracker().map().keyframes().size());
-  result.map_points = static_cast<int>(loop.tracker().map().NumGoodPoints());
-  return result;
-}
 
 }  // namespace
 
@@ -231,41 +117,76 @@ double SlamRunResult::MedianTrackingMs() const {
 }
 
 SlamRunResult RunSlamOnSequence(const TumSequence& sequence, const SlamRunOptions& options) {
-  if (options.mode == slam::SlamMode::kOracle && (!options.segmenter.empty() || options.masks != "gt")) {
+  if (options.mode == mutual::SlamMode::kOracle && (!options.segmenter.empty() || options.masks != "gt")) {
     throw Error("mode oracle takes the dataset's ground-truth masks, whose ids the ground-truth tracks name: "
                 "no segmenter or external masks");
   }
-  if (options.mode == slam::SlamMode::kMutual && (!options.segmenter.empty() || options.masks != "gt")) {
-    return RunMutualLoop(sequence, options);
-  }
-  slam::Tracker tracker(sequence.camera().intrinsics, options.tracker);
+  const std::unique_ptr<seg::Segmenter> segmenter = MakeSegmenter(sequence, options);
+  std::optional<seg::GroundTruthMotion> motion;
+  if (options.mode == mutual::SlamMode::kOracle) motion.emplace(sequence.dir());
+  mutual::FramePipelineOptions pipeline_options;
+  pipeline_options.mode = options.mode;
+  // Ground-truth masks have nothing to repair.
+  pipeline_options.refine_masks = !options.segmenter.empty() || options.masks != "gt";
+  pipeline_options.tracker = options.tracker;
+  pipeline_options.refiner = options.refiner;
+  mutual::FramePipeline pipeline(sequence.camera().intrinsics, pipeline_options, segmenter.get(),
+                                 motion ? &*motion : nullptr);
   if (!options.map_in.empty()) {
-    tracker.LoadLongTermMap(slam::LoadLongTermMap(options.map_in), options.map_in.string());
+    pipeline.LoadLongTermMap(slam::LoadLongTermMap(options.map_in), options.map_in.string());
   }
-  std::unique_ptr<MaskSource> masks;
-  if (options.mode != slam::SlamMode::kPlain) masks = std::make_unique<MaskSource>(sequence, options);
+  const bool refines = options.mode == mutual::SlamMode::kMutual && pipeline_options.refine_masks;
+  std::optional<LoopSegmentationScorer> scorer;
+  LoopSegmentationScores loop_scores;
+  if (refines) {
+    scorer.emplace(sequence);
+    loop_scores.segmenter = segmenter->name();
+  }
+  const bool write_refined = refines && !options.refined_masks_dir.empty();
+  if (write_refined) {
+    std::error_code error;
+    fs::create_directories(options.refined_masks_dir, error);
+    if (error) throw FileError(options.refined_masks_dir, "cannot create: " + error.message());
+    seg::WriteMaskFolderRecord(options.refined_masks_dir, sequence);
+  }
 
   SlamRunResult result;
   const int total = options.max_frames > 0 ? std::min<int>(options.max_frames, static_cast<int>(sequence.size()))
                                            : static_cast<int>(sequence.size());
   FrameReader frames(sequence, total, options.read_ahead);
   for (int i = 0; i < total; ++i) {
-    const RgbdFrame frame = frames.Next();
-    slam::FrameInstances instances;
-    if (masks != nullptr) instances = masks->Load(frame);
-    const slam::FrameResult frame_result = tracker.Track(frame, masks ? &instances : nullptr, options.mode);
-    AddFrame(frame_result, &result);
+    RgbdFrame frame = frames.Next();
+    frame.index = i;
+    const mutual::FrameStep step = pipeline.ProcessFrame(frame);
+    if (step.refined_in_loop) {
+      result.refine_ms.push_back(step.refine_ms);
+      loop_scores.refined_from_previous += step.refined_from_previous;
+      for (const seg::RegionDecision& decision : step.decisions) {
+        ++loop_scores.decision_counts[static_cast<int>(decision.kind)];
+      }
+      scorer->Add(step, i);
+    }
+    if (write_refined) {
+      seg::WriteExternalMaskFiles(options.refined_masks_dir, sequence.FrameStem(static_cast<size_t>(i)),
+                                  sequence.InstanceMaskAsStored(step.refined.ToIdImage(frame.color_bgr.size())),
+                                  step.refined);
+    }
     if (options.on_frame) options.on_frame(i + 1, total);
   }
-  // The plain baseline knows no instances, so its long-term map is everything it mapped;
-  // mask-moveable never mapped a moveable object; mutual and the oracle keep the
-  // background only.
-  const bool knows_instances = options.mode == slam::SlamMode::kMutual || options.mode == slam::SlamMode::kOracle;
-  result.long_term_map = tracker.ExportLongTermMap(!knows_instances);
+  if (scorer.has_value() && scorer->enabled()) {
+    loop_scores.raw = scorer->raw();
+    loop_scores.refined = scorer->refined();
+    loop_scores.refine_ms_median = result.refine_ms.empty() ? 0 : Median(result.refine_ms);
+    result.segmentation = std::move(loop_scores);
+  }
+  result.frames = pipeline.frames();
+  result.trajectory = pipeline.trajectory();
+  result.long_term_map = pipeline.ExportLongTermMap();
   result.long_term_map.description = "segslam long-term map of " + sequence.dir().string() + ", mode " +
-                                     slam::ToString(options.mode);
-  result.keyframes = static_cast<int>(tracker.map().keyframes().size());
-  result.map_points = static_cast<int>(tracker.map().NumGoodPoints());
+                                     mutual::ToString(options.mode) +
+                                     (refines ? ", segmenter " + segmenter->name() : std::string());
+  result.keyframes = static_cast<int>(pipeline.tracker().map().keyframes().size());
+  result.map_points = static_cast<int>(pipeline.tracker().map().NumGoodPoints());
   return result;
 }
 

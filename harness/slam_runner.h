@@ -1,16 +1,12 @@
-// Runs the SLAM core (slam/tracker.h) over one TUM-layout sequence in one of the three
-// modes, with instance masks from the dataset's ground truth, from an external
-// segmenter's folder or from the simulated segmenter, and writes what a run produces:
-// the trajectory (TUM, camera-to-world, localized frames only), one JSON line per frame
-// (status, timings, instance judgements) and, on request, the long-term map with a PLY
-// copy.
+// Runs the frame pipeline (mutual/frame_pipeline.h) over one TUM-layout sequence in one
+// of the modes, with instance masks from the dataset's ground truth, from an external
+// segmenter's folder or from the simulated segmenter, and collects what a run produces:
+// the trajectory (TUM, camera-to-world, localized frames only), each frame's result
+// (status, timings, instance judgements; written as frames.jsonl) and the long-term map.
 //
-// Mutual mode with a segmenter (the simulated one, or an external masks folder) runs the
-// paper's loop (mutual/mutual_loop.h): the segmenter's masks are refined with SLAM's
-// poses before SLAM judges them; the refined masks can be written out, and on a
-// sequence with ground-truth masks raw and refined masks are scored (seg/metrics.h).
-// Mutual mode with the ground-truth masks ("gt") skips the refinement: there is nothing
-// to repair.
+// Where the mutual loop refines masks (mutual mode with a segmenter or external masks)
+// the refined masks can be written out, and on a sequence with ground-truth masks raw
+// and refined masks are scored (seg/metrics.h).
 #pragma once
 
 #include <array>
@@ -23,7 +19,8 @@
 
 #include "core/pose.h"
 #include "core/tum_dataset.h"
-#include "mutual/mutual_loop.h"
+#include "mutual/frame_pipeline.h"
+#include "mutual/slam_mode.h"
 #include "seg/metrics.h"
 #include "slam/map_file.h"
 #include "slam/tracker.h"
@@ -31,7 +28,7 @@
 namespace segslam::harness {
 
 struct SlamRunOptions {
-  slam::SlamMode mode = slam::SlamMode::kPlain;
+  mutual::SlamMode mode = mutual::SlamMode::kPlain;
   // "gt": <sequence>/masks/<stem>.png with <sequence>/instances.json; otherwise a folder
   // of external masks (seg/external_masks.h). Unused in plain mode; the oracle takes
   // "gt" only, with <sequence>/tracks.json for which instances move.

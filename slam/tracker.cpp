@@ -12,37 +12,6 @@
 
 namespace segslam::slam {
 
-std::string ToString(SlamMode mode) {
-  switch (mode) {
-    case SlamMode::kPlain: return "plain";
-    case SlamMode::kMaskMoveable: return "mask-moveable";
-    case SlamMode::kMutual: return "mutual";
-    case SlamMode::kOracle: return "oracle";
-  }
-  return "?";
-}
-
-const std::vector<std::string>& SlamModeNames() {
-  static const std::vector<std::string> names = {
-      ToString(SlamMode::kPlain), ToString(SlamMode::kMaskMoveable), ToString(SlamMode::kMutual),
-      ToString(SlamMode::kOracle)};
-  return names;
-}
-
-const std::vector<std::string>& PaperModeNames() {
-  static const std::vector<std::string> names = {ToString(SlamMode::kPlain), ToString(SlamMode::kMaskMoveable),
-                                                 ToString(SlamMode::kMutual)};
-  return names;
-}
-
-SlamMode ParseSlamMode(const std::string& name) {
-  if (name == "plain") return SlamMode::kPlain;
-  if (name == "mask-moveable") return SlamMode::kMaskMoveable;
-  if (name == "mutual") return SlamMode::kMutual;
-  if (name == "oracle") return SlamMode::kOracle;
-  throw Error("unknown SLAM mode '" + name + "' (expected plain, mask-moveable, mutual or oracle)");
-}
-
 std::string ToString(TrackingStatus status) {
   switch (status) {
     case TrackingStatus::kTracking: return "tracking";
@@ -287,7 +256,8 @@ std::optional<Eigen::Isometry3d> Tracker::EstimateCoarsePose() {
 
 bool Tracker::CoarsePoseRelocalized() const { return impl_->result.status == TrackingStatus::kRelocalized; }
 
-std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& instances) {
+std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& instances,
+                                                       const std::unordered_set<std::uint16_t>* given_moving_ids) {
   Impl& s = *impl_;
   const Clock::time_point start = Clock::now();
   if (instances.ids.type() != CV_16U || instances.ids.size() != cv::Size(camera_.width, camera_.height)) {
@@ -316,9 +286,9 @@ std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& ins
       MotionEvidence evidence;
       const bool full_baseline =
           s.MeasureInstanceMotion(id, features, T_wc, trust_young_points, &judgement, &evidence);
-      if (instances.known_moving_ids.has_value()) {
+      if (given_moving_ids != nullptr) {
         judgement.judged = true;
-        judgement.moving = instances.known_moving_ids->count(id) > 0;
+        judgement.moving = given_moving_ids->count(id) > 0;
       } else {
         s.DecideMotion(full_baseline, evidence, &judgement);
         s.ApplyMotionMemory(full_baseline, &judgement, &memory);
@@ -437,21 +407,6 @@ FrameResult Tracker::UpdateMaps() {
   impl_ = std::make_unique<Impl>(camera_, options_, map_.get());
   impl_->motion_memory = std::move(motion_memory);
   return result;
-}
-
-FrameResult Tracker::Track(const RgbdFrame& frame, const FrameInstances* instances, SlamMode mode) {
-  if (mode != SlamMode::kPlain && instances == nullptr) {
-    throw Error("frame " + std::to_string(frame.index) + ": mode " + ToString(mode) + " needs instance masks");
-  }
-  if (mode == SlamMode::kOracle && !instances->known_moving_ids.has_value()) {
-    throw Error("frame " + std::to_string(frame.index) + ": mode oracle needs the frame's truly moving instances");
-  }
-  BeginFrame(frame);
-  if (mode == SlamMode::kMaskMoveable) DropMoveableFeatures(*instances);
-  EstimateCoarsePose();
-  if (mode == SlamMode::kMutual || mode == SlamMode::kOracle) JudgeInstances(*instances);
-  EstimateFinePose();
-  return UpdateMaps();
 }
 
 LongTermMapData Tracker::ExportLongTermMap(bool include_instances) const {

@@ -7,7 +7,7 @@
 //   JudgeInstances(instances)       split into A and B_i, moving/static per instance (step 3)
 //   EstimateFinePose()              T_f(t) from A and the static B_s only (step 4)
 //   UpdateMaps()                    keyframes, new points, local BA (step 5)
-// Track() runs the whole sequence of calls for one of the modes.
+// Which calls a frame gets is the mode's choice: mutual/frame_pipeline.h makes it.
 //
 // Tracking (EstimateCoarsePose): constant-velocity prediction and projection matching
 // against the last frame, else descriptor matching against the reference keyframe with
@@ -45,23 +45,6 @@
 
 namespace segslam::slam {
 
-// The three systems the bench compares (DESIGN.md "Baselines").
-enum class SlamMode {
-  kPlain,         // no masks at all (ORB-SLAM2-like)
-  kMaskMoveable,  // every feature on a moveable-class instance dropped (DynaSLAM-like)
-  kMutual,        // the paper: moving/static judgement per instance
-  kOracle,        // mutual with the true verdicts given (FrameInstances::known_moving_ids):
-                  // mutual as it would run if its judgement were never wrong
-};
-std::string ToString(SlamMode mode);
-// Every mode's name, the baselines first: the order of the paper's tables.
-const std::vector<std::string>& SlamModeNames();
-// The modes of the paper's tables, which a scenario runs unless told otherwise (the
-// oracle needs the ground truth and is asked for by name).
-const std::vector<std::string>& PaperModeNames();
-// Throws segslam::Error listing the valid names.
-SlamMode ParseSlamMode(const std::string& name);
-
 enum class TrackingStatus { kTracking, kRelocalized, kLost };
 std::string ToString(TrackingStatus status);
 
@@ -70,10 +53,6 @@ std::string ToString(TrackingStatus status);
 struct FrameInstances {
   cv::Mat ids;                                   // CV_16U, frame-sized, 0 = background
   std::unordered_set<std::uint16_t> moveable_ids;
-  // The instances that truly move in this frame, when the caller knows them (the oracle
-  // mode, from the generator's ground truth): JudgeInstances() then takes these verdicts
-  // instead of its own, so a run shows what a perfect judgement would give.
-  std::optional<std::unordered_set<std::uint16_t>> known_moving_ids;
 };
 
 struct InstanceJudgement {
@@ -302,17 +281,15 @@ class Tracker {
   // matches, rejected ones too, of the features on no moveable-class instance), when at
   // least min_tracking_inliers of them fit; else with the coarse pose. Instances that
   // fill the view pull the coarse pose along, and then agree with it whether they move
-  // or not. With instances.known_moving_ids the motion is still measured (and recorded)
-  // but the verdicts are the given ones.
-  std::vector<InstanceJudgement> JudgeInstances(const FrameInstances& instances);
+  // or not. With `given_moving_ids` (verdicts decided elsewhere, e.g. the bench's oracle)
+  // the motion is still measured and recorded, but every instance is judged, moving
+  // exactly when its id is in the set.
+  std::vector<InstanceJudgement> JudgeInstances(const FrameInstances& instances,
+                                                const std::unordered_set<std::uint16_t>* given_moving_ids = nullptr);
   // Step 4. Without JudgeInstances it equals the coarse pose.
   std::optional<Eigen::Isometry3d> EstimateFinePose();
   // Step 5; returns the frame's result (timings, status, judgements).
   FrameResult UpdateMaps();
-
-  // All steps for `mode`; `instances` may be null for kPlain and is required otherwise,
-  // with known_moving_ids for kOracle.
-  FrameResult Track(const RgbdFrame& frame, const FrameInstances* instances, SlamMode mode);
 
   // The long-term map (DESIGN.md core step 5): background points, or every point for
   // `include_instances` (the plain baseline). In localization mode: the loaded map as is.

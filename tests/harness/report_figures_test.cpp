@@ -16,8 +16,10 @@
 
 #include "core/error.h"
 #include "harness/report_document.h"
+#include "mutual/slam_mode.h"
 #include "tests/core/test_util.h"
 #include "tests/slam/synthetic_room.h"
+#include "tests/slam/tracking_steps.h"
 
 namespace segslam::harness {
 namespace {
@@ -268,7 +270,7 @@ struct TrackedRun {
   std::vector<FrameResult> results;
 };
 
-TrackedRun TrackMovingBox(slam::SlamMode mode, int frames, bool record_features) {
+TrackedRun TrackMovingBox(mutual::SlamMode mode, int frames, bool record_features) {
   slam::TrackerOptions options;
   options.initial_T_wc = PathPose(0);
   options.record_features = record_features;
@@ -279,14 +281,16 @@ TrackedRun TrackMovingBox(slam::SlamMode mode, int frames, bool record_features)
   for (int i = 0; i < frames; ++i) {
     const RenderedFrame rendered = MovingBoxFrame(i);
     instances.ids = rendered.instance_ids;
-    run.results.push_back(tracker.Track(rendered.frame, &instances, mode));
+    run.results.push_back(mode == mutual::SlamMode::kMaskMoveable
+                              ? slam::TrackMaskMoveable(tracker, rendered.frame, instances)
+                              : slam::TrackJudging(tracker, rendered.frame, instances));
   }
   return run;
 }
 
 // The mutual run is shared by the tests that need it (it takes a few seconds).
 const TrackedRun& MutualRun() {
-  static const TrackedRun run = TrackMovingBox(slam::SlamMode::kMutual, 24, true);
+  static const TrackedRun run = TrackMovingBox(mutual::SlamMode::kMutual, 24, true);
   return run;
 }
 
@@ -336,7 +340,7 @@ TEST(FeatureRecordTest, MutualRecordsEveryFeatureOnceWithAConsistentKind) {
 }
 
 TEST(FeatureRecordTest, MaskMoveableRecordsTheFeaturesItRemoved) {
-  const TrackedRun run = TrackMovingBox(slam::SlamMode::kMaskMoveable, 6, true);
+  const TrackedRun run = TrackMovingBox(mutual::SlamMode::kMaskMoveable, 6, true);
   for (const FrameResult& result : run.results) {
     ASSERT_EQ(result.feature_records.size(), static_cast<size_t>(result.num_features));
     const RenderedFrame rendered = MovingBoxFrame(result.frame_index);
@@ -358,7 +362,7 @@ TEST(FeatureRecordTest, MaskMoveableRecordsTheFeaturesItRemoved) {
 }
 
 TEST(FeatureRecordTest, OffByDefault) {
-  const TrackedRun run = TrackMovingBox(slam::SlamMode::kMutual, 2, false);
+  const TrackedRun run = TrackMovingBox(mutual::SlamMode::kMutual, 2, false);
   for (const FrameResult& result : run.results) EXPECT_TRUE(result.feature_records.empty());
 }
 

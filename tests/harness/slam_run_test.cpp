@@ -54,7 +54,7 @@ struct Scored {
   AteResult ate;
 };
 
-Scored RunAndScore(const fs::path& sequence_dir, slam::SlamMode mode, const fs::path& map_in = {},
+Scored RunAndScore(const fs::path& sequence_dir, mutual::SlamMode mode, const fs::path& map_in = {},
                    const std::optional<Eigen::Isometry3d>& fixed_alignment = std::nullopt) {
   const TumSequence sequence = TumSequence::Open(sequence_dir);
   SlamRunOptions options;
@@ -72,7 +72,7 @@ Scored RunAndScore(const fs::path& sequence_dir, slam::SlamMode mode, const fs::
   std::printf("%-40s %-13s frames %3zu localized %5.1f%% keyframes %3d points %5d ATE rmse %.4f m "
               "max %.4f m, path %.2f m, median tracking %.1f ms\n",
               (sequence_dir.parent_path().filename() / sequence_dir.filename()).c_str(),
-              slam::ToString(mode).c_str(), scored.run.frames.size(), 100 * scored.run.LocalizedShare(),
+              mutual::ToString(mode).c_str(), scored.run.frames.size(), 100 * scored.run.LocalizedShare(),
               scored.run.keyframes, scored.run.map_points, scored.ate.translation_m.rmse,
               scored.ate.translation_m.max, PathLength(sequence.groundtruth()),
               scored.run.MedianTrackingMs());
@@ -131,7 +131,7 @@ TEST(SlamRunResultTest, MedianTrackingTimeAveragesTheMiddleTwo) {
 TEST(SlamRunTest, StaticOfficeTracksWithinOneCentimetre) {
   const fs::path dir = kDataDir / "office_static" / "pass1";
   RequireDataset(dir);
-  const Scored scored = RunAndScore(dir, slam::SlamMode::kPlain);
+  const Scored scored = RunAndScore(dir, mutual::SlamMode::kPlain);
   EXPECT_EQ(scored.run.LocalizedShare(), 1.0);
   EXPECT_LT(scored.ate.translation_m.rmse, 0.01);
 }
@@ -139,7 +139,7 @@ TEST(SlamRunTest, StaticOfficeTracksWithinOneCentimetre) {
 TEST(SlamRunTest, StaticCityTracksWithinPointThreePercentOfTheRoute) {
   const fs::path dir = kDataDir / "city_static" / "pass1";
   RequireDataset(dir);
-  const Scored scored = RunAndScore(dir, slam::SlamMode::kPlain);
+  const Scored scored = RunAndScore(dir, mutual::SlamMode::kPlain);
   const double route_m = PathLength(TumSequence::Open(dir).groundtruth());
   EXPECT_EQ(scored.run.LocalizedShare(), 1.0);
   EXPECT_LT(scored.ate.translation_m.rmse, 0.003 * route_m);
@@ -152,9 +152,9 @@ TEST(SlamRunTest, StaticCityTracksWithinPointThreePercentOfTheRoute) {
 TEST(SlamRunTest, MutualHalvesPlainErrorWhenAWalkerCoversTheView) {
   const fs::path dir = kDataDir / "office_rpy" / "pass1";
   RequireDataset(dir);
-  const Scored plain = RunAndScore(dir, slam::SlamMode::kPlain);
-  const Scored mutual = RunAndScore(dir, slam::SlamMode::kMutual);
-  const Scored masked = RunAndScore(dir, slam::SlamMode::kMaskMoveable);
+  const Scored plain = RunAndScore(dir, mutual::SlamMode::kPlain);
+  const Scored mutual = RunAndScore(dir, mutual::SlamMode::kMutual);
+  const Scored masked = RunAndScore(dir, mutual::SlamMode::kMaskMoveable);
   EXPECT_EQ(mutual.run.LocalizedShare(), 1.0);
   EXPECT_LE(mutual.ate.translation_m.rmse, 0.5 * plain.ate.translation_m.rmse);
   EXPECT_LE(mutual.ate.translation_m.rmse, 1.1 * masked.ate.translation_m.rmse + 0.001);
@@ -171,8 +171,8 @@ TEST(SlamRunTest, MutualHalvesPlainErrorWhenAWalkerCoversTheView) {
 TEST(SlamRunTest, MutualHoldsThroughTheWalkingXyzOpening) {
   const fs::path dir = kDataDir / "office_seg" / "pass1";
   RequireDataset(dir);
-  const Scored plain = RunAndScore(dir, slam::SlamMode::kPlain);
-  const Scored mutual = RunAndScore(dir, slam::SlamMode::kMutual);
+  const Scored plain = RunAndScore(dir, mutual::SlamMode::kPlain);
+  const Scored mutual = RunAndScore(dir, mutual::SlamMode::kMutual);
   EXPECT_EQ(mutual.run.LocalizedShare(), 1.0);
   EXPECT_LT(mutual.ate.translation_m.rmse, 0.01);
   EXPECT_LE(mutual.ate.translation_m.rmse, 0.5 * plain.ate.translation_m.rmse);
@@ -183,7 +183,7 @@ TEST(SlamRunTest, MutualHoldsThroughTheWalkingXyzOpening) {
 TEST(SlamRunTest, OracleJudgesAsTheGroundTruthTracksSay) {
   const fs::path dir = kDataDir / "office_seg" / "pass1";
   RequireDataset(dir);
-  const Scored oracle = RunAndScore(dir, slam::SlamMode::kOracle);
+  const Scored oracle = RunAndScore(dir, mutual::SlamMode::kOracle);
   EXPECT_EQ(oracle.run.LocalizedShare(), 1.0);
   EXPECT_LT(oracle.ate.translation_m.rmse, 0.01);
   const MovingDetection detection = ScoreMovingJudgements(dir, oracle.run);
@@ -198,7 +198,7 @@ TEST(SlamRunTest, OracleRefusesMasksWithoutGroundTruthIdentity) {
   const fs::path dir = kDataDir / "office_seg" / "pass1";
   RequireDataset(dir);
   SlamRunOptions options;
-  options.mode = slam::SlamMode::kOracle;
+  options.mode = mutual::SlamMode::kOracle;
   options.max_frames = 2;
   options.segmenter = "fcis-like";
   EXPECT_THROW(RunSlamOnSequence(TumSequence::Open(dir), options), Error);
@@ -225,10 +225,10 @@ TEST(SlamRunTest, OracleRefusesMasksWithoutGroundTruthIdentity) {
 TEST(SlamRunTest, SecondPassLocalizesOnTheFirstPassMap) {
   const fs::path dataset = kDataDir / "city_static";
   RequireDataset(dataset / "pass2");
-  const Scored pass1 = RunAndScore(dataset / "pass1", slam::SlamMode::kMutual);
+  const Scored pass1 = RunAndScore(dataset / "pass1", mutual::SlamMode::kMutual);
   const fs::path map_file = ScratchPath("city.segslam");
   slam::SaveLongTermMap(map_file, pass1.run.long_term_map);
-  const Scored pass2 = RunAndScore(dataset / "pass2", slam::SlamMode::kMutual, map_file, pass1.ate.T_gt_est);
+  const Scored pass2 = RunAndScore(dataset / "pass2", mutual::SlamMode::kMutual, map_file, pass1.ate.T_gt_est);
   fs::remove(map_file);
   // A static city: every frame localizes, and pass 2 against pass 1's estimate at the
   // same place is held to pass 1's own criterion (0.3 % of the route). Not the ATE in
@@ -313,9 +313,9 @@ struct LensRuns {
 LensRuns RunThroughLens(const fs::path& dir, const LensDistortion& lens) {
   const fs::path scratch = fs::temp_directory_path() / ("segslam_lens_" + std::to_string(::getpid()));
   LensRuns runs;
-  runs.ideal = RunAndScore(dir, slam::SlamMode::kPlain);
-  runs.undistorted = RunAndScore(WriteDistortedCopy(dir, lens, true, scratch / "named"), slam::SlamMode::kPlain);
-  runs.ignored = RunAndScore(WriteDistortedCopy(dir, lens, false, scratch / "ignored"), slam::SlamMode::kPlain);
+  runs.ideal = RunAndScore(dir, mutual::SlamMode::kPlain);
+  runs.undistorted = RunAndScore(WriteDistortedCopy(dir, lens, true, scratch / "named"), mutual::SlamMode::kPlain);
+  runs.ignored = RunAndScore(WriteDistortedCopy(dir, lens, false, scratch / "ignored"), mutual::SlamMode::kPlain);
   fs::remove_all(scratch);
   return runs;
 }
@@ -379,7 +379,7 @@ TEST(SlamRunTest, MasksOfADistortedSequenceAreReadAndWrittenOnItsStoredImages) {
   }
 
   SlamRunOptions options;
-  options.mode = slam::SlamMode::kMutual;
+  options.mode = mutual::SlamMode::kMutual;
   options.masks = masks_dir.string();
   options.refined_masks_dir = scratch / "refined";
   fs::create_directories(options.refined_masks_dir);
@@ -468,7 +468,7 @@ TEST(SlamRunTest, UnreadableFrameStopsTheRunNamingTheFile) {
   for (const char* segmenter : {"", "fcis-like"}) {
     for (const bool read_ahead : {true, false}) {
       SlamRunOptions options;
-      options.mode = *segmenter != 0 ? slam::SlamMode::kMutual : slam::SlamMode::kPlain;
+      options.mode = *segmenter != 0 ? mutual::SlamMode::kMutual : mutual::SlamMode::kPlain;
       options.segmenter = segmenter;
       options.max_frames = 10;
       options.read_ahead = read_ahead;

@@ -17,7 +17,7 @@
 #include "core/image_io.h"
 #include "core/json_file.h"
 #include "core/tum_dataset.h"
-#include "mutual/mutual_loop.h"
+#include "mutual/frame_pipeline.h"
 #include "seg/external_masks.h"
 #include "seg/simulated_segmenter.h"
 
@@ -37,7 +37,7 @@ LoopRun RunLoop(const fs::path& sequence_dir, const std::string& segmenter, cons
                 int max_frames = 0) {
   const TumSequence sequence = TumSequence::Open(sequence_dir);
   SlamRunOptions options;
-  options.mode = slam::SlamMode::kMutual;
+  options.mode = mutual::SlamMode::kMutual;
   options.segmenter = segmenter;
   options.segmenter_seed = 1;
   options.refined_masks_dir = refined_masks_dir;
@@ -101,7 +101,7 @@ TEST(MutualLoopDatasetTest, RefinedMasksReadBackAsExternalMasks) {
   const TumSequence sequence = TumSequence::Open(dir);
   const cv::Size size(sequence.camera().intrinsics.width, sequence.camera().intrinsics.height);
   seg::SimulatedSegmenter segmenter(dir, seg::SimulatedSegmenterOptions::Preset("fcis-like"), 1, "fcis-like");
-  mutual::MutualLoop loop(sequence.camera().intrinsics, segmenter);
+  mutual::FramePipeline loop(sequence.camera().intrinsics, mutual::FramePipelineOptions{}, &segmenter);
   for (int i = 0; i < kFrames; ++i) {
     RgbdFrame frame = sequence.LoadFrame(static_cast<size_t>(i));
     frame.index = i;

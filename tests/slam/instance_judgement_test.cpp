@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "tests/slam/synthetic_room.h"
+#include "tests/slam/tracking_steps.h"
 
 namespace segslam::slam {
 namespace {
@@ -90,7 +91,7 @@ std::vector<FrameResult> TrackMutual(const std::vector<RenderedFrame>& frames, T
   std::vector<FrameResult> results;
   for (const RenderedFrame& rendered : frames) {
     instances.ids = rendered.instance_ids;
-    results.push_back(tracker.Track(rendered.frame, &instances, SlamMode::kMutual));
+    results.push_back(TrackJudging(tracker, rendered.frame, instances));
     EXPECT_TRUE(results.back().localized()) << "frame " << rendered.frame.index;
   }
   return results;

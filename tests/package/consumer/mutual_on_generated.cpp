@@ -5,7 +5,7 @@
 #include <string>
 
 #include "core/tum_dataset.h"
-#include "mutual/mutual_loop.h"
+#include "mutual/frame_pipeline.h"
 #include "scenes/scenario.h"
 #include "seg/simulated_segmenter.h"
 #include "sim/dataset_generator.h"
@@ -20,14 +20,14 @@ int main(int argc, char** argv) {
   const std::string pass1 = std::string(argv[2]) + "/pass1";
   const TumSequence sequence = TumSequence::Open(pass1);
   seg::SimulatedSegmenter segmenter(pass1, seg::SimulatedSegmenterOptions::Preset("fcis-like"), /*seed=*/1);
-  mutual::MutualLoop loop(sequence.camera().intrinsics, segmenter);
+  mutual::FramePipeline loop(sequence.camera().intrinsics, mutual::FramePipelineOptions{}, &segmenter);
   // The loop's world frame is its first camera's: compare poses relative to frame 0.
   const Eigen::Isometry3d gt0_inv = sequence.groundtruth().front().T_wc.inverse();
   int localized = 0;
   double worst_m = 0;
   for (size_t i = 0; i < sequence.size(); ++i) {
     if (sequence.groundtruth()[i].stamp_s != sequence.entries()[i].rgb_stamp_s) return 1;  // one pose per frame
-    const mutual::MutualFrameResult result = loop.ProcessFrame(sequence.LoadFrame(i));
+    const mutual::FrameStep result = loop.ProcessFrame(sequence.LoadFrame(i));
     if (!result.slam.localized()) continue;
     ++localized;
     const Eigen::Vector3d truth = (gt0_inv * sequence.groundtruth()[i].T_wc).translation();

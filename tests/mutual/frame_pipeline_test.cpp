@@ -1,6 +1,6 @@
 // The loop on a ray-cast room (tests/slam/synthetic_room.h) with a scripted segmenter:
 // exact poses and masks, so each step's hand-over can be checked without the simulator.
-#include "mutual/mutual_loop.h"
+#include "mutual/frame_pipeline.h"
 
 #include <gtest/gtest.h>
 
@@ -12,6 +12,7 @@
 #include "core/coco.h"
 #include "core/error.h"
 #include "tests/slam/synthetic_room.h"
+#include "tests/slam/tracking_steps.h"
 
 namespace segslam::mutual {
 namespace {
@@ -94,12 +95,12 @@ TEST(MutualLoopTest, RefinedIdsStayStableAndAMissedDetectionIsCarriedOver) {
   for (int i = 0; i < kFrames; ++i) frames.push_back(RenderQuads(scene, camera, PathPose(i), i, i / 30.0));
 
   ScriptedSegmenter segmenter(frames);
-  MutualLoopOptions options;
+  FramePipelineOptions options;
   options.tracker.initial_T_wc = PathPose(0);
-  MutualLoop loop(camera, segmenter, options);
+  FramePipeline loop(camera, options, &segmenter);
   std::set<std::uint16_t> refined_ids;
   for (int i = 0; i < kFrames; ++i) {
-    const MutualFrameResult result = loop.ProcessFrame(frames[static_cast<size_t>(i)].frame);
+    const FrameStep result = loop.ProcessFrame(frames[static_cast<size_t>(i)].frame);
     ASSERT_TRUE(result.slam.localized()) << "frame " << i;
     EXPECT_LT((result.slam.T_wc.translation() - PathPose(i).translation()).norm(), 0.01) << "frame " << i;
     EXPECT_EQ(result.refined_from_previous, i > 0) << "frame " << i;
@@ -209,14 +210,14 @@ TEST(MutualLoopTest, WalkingPersonIsJudgedMovingAndParkedCarStaticThroughTheLoop
   }
 
   GroundTruthSegmenter segmenter(frames, {{kWalker, kPersonCategory}, {kCar, kCarCategory}});
-  MutualLoopOptions options;
+  FramePipelineOptions options;
   options.tracker.initial_T_wc = SwayingPose(0);
-  MutualLoop loop(camera, segmenter, options);
+  FramePipeline loop(camera, options, &segmenter);
   std::set<std::uint16_t> walker_ids, car_ids;
   int walker_judged = 0, walker_moving = 0, car_judged = 0, car_static = 0;
   double worst_m = 0, sum_squared_m2 = 0, worst_deg = 0;
   for (int i = 0; i < kFrames; ++i) {
-    const MutualFrameResult result = loop.ProcessFrame(frames[static_cast<size_t>(i)].frame);
+    const FrameStep result = loop.ProcessFrame(frames[static_cast<size_t>(i)].frame);
     ASSERT_TRUE(result.slam.localized()) << "frame " << i;
     const double error_m = PositionErrorM(result.slam.T_wc, SwayingPose(i));
     worst_m = std::max(worst_m, error_m);
@@ -276,7 +277,7 @@ TEST(MutualLoopTest, WalkingPersonIsJudgedMovingAndParkedCarStaticThroughTheLoop
   slam::Tracker plain(camera, options.tracker);
   double plain_worst_m = 0;
   for (int i = 0; i < kFrames; ++i) {
-    const slam::FrameResult result = plain.Track(frames[static_cast<size_t>(i)].frame, nullptr, slam::SlamMode::kPlain);
+    const slam::FrameResult result = TrackPlain(plain, frames[static_cast<size_t>(i)].frame);
     if (result.localized()) plain_worst_m = std::max(plain_worst_m, PositionErrorM(result.T_wc, SwayingPose(i)));
   }
   EXPECT_GT(plain_worst_m, 0.1) << "the walker no longer drags an unjudging tracker: the scene does not test the pose";
@@ -307,9 +308,47 @@ TEST(MutualLoopTest, InvalidRefinerOptionsAreAnError) {
   const PinholeCamera camera = PinholeCamera::FromVerticalFov(64, 48, 50);
   std::vector<RenderedFrame> frames;
   ScriptedSegmenter segmenter(frames);
-  MutualLoopOptions options;
+  FramePipelineOptions options;
   options.refiner.max_match_cost = -1;
-  EXPECT_THROW(MutualLoop(camera, segmenter, options), Error);
+  EXPECT_THROW(FramePipeline(camera, options, &segmenter), Error);
+}
+
+// A mode's needs are checked once, when the pipeline is made: every mode but plain
+// reads masks, and the oracle takes the ground truth's verdicts.
+TEST(FramePipelineTest, ModesWithoutWhatTheyNeedAreRefused) {
+  const PinholeCamera camera = PinholeCamera::FromVerticalFov(64, 48, 50);
+  std::vector<RenderedFrame> frames;
+  ScriptedSegmenter segmenter(frames);
+  FramePipelineOptions options;
+  for (const SlamMode mode : {SlamMode::kMaskMoveable, SlamMode::kMutual, SlamMode::kOracle}) {
+    options.mode = mode;
+    EXPECT_THROW(FramePipeline(camera, options, nullptr), Error) << ToString(mode);
+  }
+  options.mode = SlamMode::kOracle;
+  EXPECT_THROW(FramePipeline(camera, options, &segmenter), Error);
+  options.mode = SlamMode::kPlain;
+  EXPECT_NO_THROW(FramePipeline(camera, options, nullptr));
+}
+
+// Plain mode is the tracker's every-feature tracking: the pipeline gives the same poses
+// as the tracker's calls made by hand.
+TEST(FramePipelineTest, PlainModeIsTheTrackersOwnTracking) {
+  const PinholeCamera camera = PinholeCamera::FromVerticalFov(640, 480, 50);
+  const auto room = RoomQuads(1);
+  FramePipelineOptions options;
+  options.mode = SlamMode::kPlain;
+  FramePipeline pipeline(camera, options, nullptr);
+  slam::Tracker tracker(camera, options.tracker);
+  for (int i = 0; i < 12; ++i) {
+    const RgbdFrame frame = RenderQuads(room, camera, slam::testing::HandHeldPathPose(i), i, i / 30.0).frame;
+    const FrameStep step = pipeline.ProcessFrame(frame);
+    const slam::FrameResult by_hand = slam::TrackPlain(tracker, frame);
+    ASSERT_EQ(step.slam.status, by_hand.status) << "frame " << i;
+    EXPECT_TRUE(step.slam.T_wc.isApprox(by_hand.T_wc, 1e-12)) << "frame " << i;
+    EXPECT_TRUE(step.initial.instances.empty());
+  }
+  EXPECT_EQ(pipeline.frames().size(), 12u);
+  EXPECT_EQ(pipeline.trajectory().size(), 12u);
 }
 
 }  // namespace

@@ -1,0 +1,36 @@
+#include "mutual/slam_mode.h"
+
+#include "core/error.h"
+
+namespace segslam::mutual {
+
+std::string ToString(SlamMode mode) {
+  switch (mode) {
+    case SlamMode::kPlain: return "plain";
+    case SlamMode::kMaskMoveable: return "mask-moveable";
+    case SlamMode::kMutual: return "mutual";
+    case SlamMode::kOracle: return "oracle";
+  }
+  return "?";
+}
+
+const std::vector<std::string>& SlamModeNames() {
+  static const std::vector<std::string> names = {ToString(SlamMode::kPlain), ToString(SlamMode::kMaskMoveable),
+                                                 ToString(SlamMode::kMutual), ToString(SlamMode::kOracle)};
+  return names;
+}
+
+const std::vector<std::string>& PaperModeNames() {
+  static const std::vector<std::string> names = {ToString(SlamMode::kPlain), ToString(SlamMode::kMaskMoveable),
+                                                 ToString(SlamMode::kMutual)};
+  return names;
+}
+
+SlamMode ParseSlamMode(const std::string& name) {
+  for (const SlamMode mode : {SlamMode::kPlain, SlamMode::kMaskMoveable, SlamMode::kMutual, SlamMode::kOracle}) {
+    if (name == ToString(mode)) return mode;
+  }
+  throw Error("unknown SLAM mode '" + name + "' (expected plain, mask-moveable, mutual or oracle)");
+}
+
+}  // namespace segslam::mutual
