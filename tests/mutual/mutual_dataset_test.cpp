@@ -18,7 +18,10 @@
 #include "core/json_file.h"
 #include "core/tum_dataset.h"
 #include "mutual/frame_pipeline.h"
+#include "core/error.h"
+#include "core/instances.h"
 #include "seg/external_masks.h"
+#include "seg/ground_truth.h"
 #include "seg/simulated_segmenter.h"
 
 namespace segslam::harness {
@@ -123,6 +126,37 @@ TEST(MutualLoopDatasetTest, RefinedMasksReadBackAsExternalMasks) {
     EXPECT_EQ(categories_read, categories_refined) << "frame " << i;
   }
   fs::remove_all(out);
+}
+
+// The pipeline's ground truth: the segmenter gives back the stored id image, each
+// instance with its category from instances.json, and the oracle's verdicts name
+// walkers (the office's only moving class) on most frames.
+TEST(GroundTruthTest, SegmenterGivesTheStoredMasksAndMotionTheWalkers) {
+  const fs::path dir = kDataDir / "office_seg" / "pass1";
+  const TumSequence sequence = TumSequence::Open(dir);
+  const InstanceTable table = InstanceTable::Read(dir / "instances.json");
+  seg::GroundTruthSegmenter segmenter(sequence);
+  const seg::GroundTruthMotion motion(dir);
+  int frames_with_movers = 0;
+  for (int i = 0; i < 20; ++i) {
+    RgbdFrame frame = sequence.LoadFrame(static_cast<size_t>(i));
+    frame.index = i;
+    const seg::FrameSegmentation segmentation = segmenter.Segment(frame);
+    const cv::Mat stored = sequence.LoadInstanceMask(dir / "masks" / (sequence.FrameStem(static_cast<size_t>(i)) + ".png"));
+    EXPECT_EQ(cv::countNonZero(segmentation.ToIdImage(frame.color_bgr.size()) != stored), 0) << "frame " << i;
+    ASSERT_FALSE(segmentation.instances.empty());
+    for (const seg::InstanceMask& instance : segmentation.instances) {
+      ASSERT_NE(table.Find(instance.track_id), nullptr);
+      EXPECT_EQ(instance.category_id, table.Find(instance.track_id)->category_id);
+    }
+    for (const std::uint16_t id : motion.MovingIds(i)) {
+      ASSERT_NE(table.Find(id), nullptr);
+      EXPECT_EQ(table.Find(id)->category_name, "person") << "frame " << i << ", instance " << id;
+    }
+    frames_with_movers += !motion.MovingIds(i).empty();
+  }
+  EXPECT_GE(frames_with_movers, 15);
+  EXPECT_THROW(seg::GroundTruthMotion(kDataDir / "no_such_sequence"), Error);
 }
 
 }  // namespace
