@@ -112,6 +112,7 @@ struct BenchSlamArgs {
   std::string sequence;
   // What `segslam run` also takes: mode, masks, segmenter, seed, frames, camera, tracker
   // and refiner overrides (no --strength, --map-in or --map-out here).
+  RunConfigWords words;
   DatasetRunOptions run;
   std::string json_file;
 };
@@ -132,11 +133,13 @@ TimeSummary Summarize(std::vector<double> values) {
   return summary;
 }
 
-int RunBenchSlam(const BenchSlamArgs& args) {
+int RunBenchSlam(const BenchSlamArgs& bench_args) {
+  BenchSlamArgs args = bench_args;
+  args.run.run = args.words.ToConfig("bench slam");
   SlamRunOptions options = SlamRunOptionsFor(args.run);
   options.read_ahead = false;
   if (!args.run.refiner_options.empty()) {
-    if (!RunsMutualLoop(args.run)) {
+    if (!args.run.run.RefinesMasks()) {
       throw Error("bench slam: --refiner applies to the mutual loop: mode mutual with --segmenter or --masks");
     }
     if (std::string problem; !options.refiner.IsValid(&problem)) throw Error("bench slam: --refiner: " + problem);
@@ -144,7 +147,8 @@ int RunBenchSlam(const BenchSlamArgs& args) {
   // One core, as ORB-SLAM2's tracking thread: OpenCV's own threads would flatter us.
   cv::setNumThreads(1);
   const TumSequence sequence = TumSequence::OpenWithCameraFile(args.sequence, args.run.camera_file);
-  ProgressBar bar("bench slam " + args.run.mode);
+  const std::string mode = args.run.run.ModeName();
+  ProgressBar bar("bench slam " + mode);
   const auto start = std::chrono::steady_clock::now();
   options.on_frame = [&](int done, int total) {
     const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -167,11 +171,9 @@ int RunBenchSlam(const BenchSlamArgs& args) {
   if (!run.refine_ms.empty()) stages.emplace_back("mask refinement", run.refine_ms);
   // Per-frame times depend on the CPU (1.7x apart on two machines of the same kind): name it.
   const nlohmann::json machine = MachineDescription();
-  const std::string masks = options.mode == mutual::SlamMode::kPlain ? "none"
-                            : !args.run.segmenter.empty()           ? "segmenter " + args.run.segmenter
-                                                                    : args.run.masks;
+  const std::string masks = args.run.run.masks.Describe();
   fmt::print("sequence {} ({}x{}), mode {}, masks {}, {} frames, {} features requested, one core of {}\n",
-             args.sequence, sequence.camera().intrinsics.width, sequence.camera().intrinsics.height, args.run.mode,
+             args.sequence, sequence.camera().intrinsics.width, sequence.camera().intrinsics.height, mode,
              masks, run.frames.size(), options.tracker.orb.max_features, MachineLine(machine));
   for (const auto& [what, overrides] :
        {std::pair{"tracker", args.run.tracker_options}, {"refiner", args.run.refiner_options}}) {
@@ -179,7 +181,7 @@ int RunBenchSlam(const BenchSlamArgs& args) {
   }
   fmt::print("{:<26} {:>10} {:>10} {:>10}\n", "stage (ms per frame)", "median", "p90", "mean");
   nlohmann::json json = {{"sequence", args.sequence},
-                         {"mode", args.run.mode},
+                         {"mode", mode},
                          {"masks", masks},
                          {"frames", run.frames.size()},
                          {"features_requested", options.tracker.orb.max_features},
@@ -225,18 +227,18 @@ void AddBenchCommand(CLI::App& app, std::function<int()>* action) {
   slam->add_option("sequence", slam_args->sequence,
                    "A TUM-layout sequence (with masks/ for mutual and mask-moveable, unless --masks names a folder)")
       ->required();
-  slam->add_option("--mode", slam_args->run.mode, "plain, mask-moveable, mutual or oracle")
+  slam->add_option("--mode", slam_args->words.mode, "plain, mask-moveable, mutual or oracle")
       ->check(CLI::IsMember(mutual::SlamModeNames()))
       ->capture_default_str();
   slam->add_option("--frames", slam_args->run.frames, "Only the first N frames (0 = all)")
       ->check(WholeNumberIn(0, kMaxFrames, "0 = all"));
-  slam->add_option("--masks", slam_args->run.masks,
+  slam->add_option("--masks", slam_args->words.masks,
                    "'gt' (the sequence's masks/) or a folder of external masks (mutual: refined in the loop)")
       ->capture_default_str();
-  slam->add_option("--segmenter", slam_args->run.segmenter,
+  slam->add_option("--segmenter", slam_args->words.segmenter,
                    "Simulated segmenter preset on the sequence's ground-truth masks (mutual: refined in the loop)")
       ->check(CLI::IsMember(seg::SimulatedSegmenterOptions::PresetNames()));
-  slam->add_option("--seed", slam_args->run.seed, "Seed of the simulated segmenter")->capture_default_str();
+  slam->add_option("--seed", slam_args->words.seed, "Seed of the simulated segmenter")->capture_default_str();
   slam->add_option("--json", slam_args->json_file, "Also write the results as JSON");
   slam->add_option("--camera", slam_args->run.camera_file,
                    "camera.yaml to use instead of the sequence's own (for a real sequence without one)");

@@ -123,8 +123,10 @@ std::string BenchSettings::SegmenterLabel() const {
   return segmenter == "gt" ? segmenter : SimulatedSegmenterLabel(segmenter, segmenter_strength);
 }
 
-bool BenchSettings::ModeIsDeterministic(const std::string& mode) const {
-  return mode == "plain" || mode == "oracle" || segmenter == "gt";
+RunConfig BenchSettings::RunConfigFor(const std::string& mode, std::uint64_t run_seed) const {
+  const bool simulated = segmenter != "gt" && mode != "plain" && mode != "oracle";
+  return MakeRunConfig("bench", mode, "gt", simulated ? segmenter : "", run_seed,
+                       simulated ? segmenter_strength : 1.0);
 }
 
 }  // namespace segslam::harness

@@ -10,6 +10,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "harness/run_config.h"
 #include "mutual/slam_mode.h"
 #include "seg/refiner.h"
 #include "slam/tracker.h"
@@ -40,8 +41,13 @@ struct BenchSettings {
   static BenchSettings FromYaml(const YAML::Node& bench, const std::string& origin);
   // Empty when valid, else what is wrong.
   std::string Check() const;
+  // The run of `mode` with the segmenter's seed `seed`: plain reads no masks, the oracle
+  // the ground truth's (its verdicts name their ids), mask-moveable and mutual the
+  // segmenter's (or the ground truth's, segmenter gt). `mode` must be one of `modes`'s
+  // names (Check()).
+  RunConfig RunConfigFor(const std::string& mode, std::uint64_t seed) const;
   // Without a simulated segmenter SLAM is deterministic: one run says everything.
-  bool ModeIsDeterministic(const std::string& mode) const;
+  bool ModeIsDeterministic(const std::string& mode) const { return RunConfigFor(mode, seed).IsDeterministic(); }
   // The segmenter as reports name it: "gt", "fcis-like", "fcis-like@2".
   std::string SegmenterLabel() const;
   // The refinement options of the mutual loop: the defaults with `refiner` set.

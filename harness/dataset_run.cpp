@@ -17,10 +17,6 @@ namespace segslam::harness {
 
 namespace fs = std::filesystem;
 
-std::string SimulatedSegmenterLabel(const std::string& preset, double strength) {
-  return strength == 1.0 ? preset : fmt::format("{}@{}", preset, strength);
-}
-
 namespace {
 
 // `fixed_alignment`: score the ATE in that frame (pass 2 in pass 1's map frame); without
@@ -30,7 +26,7 @@ PassRun RunPass(const DatasetRunOptions& args, const std::string& name, const fs
                 const std::optional<Eigen::Isometry3d>& fixed_alignment, bool in_map_frame = false) {
   const TumSequence sequence = TumSequence::OpenWithCameraFile(sequence_dir, args.camera_file);
   SlamRunOptions options = SlamRunOptionsFor(args);
-  if (RunsMutualLoop(args)) options.refined_masks_dir = out_dir / "refined_masks";
+  if (args.run.RefinesMasks()) options.refined_masks_dir = out_dir / "refined_masks";
   options.map_in = map_in;
   options.on_frame = [&](int done, int total) {
     if (args.on_frame) args.on_frame(name, done, total);
@@ -44,23 +40,18 @@ PassRun RunPass(const DatasetRunOptions& args, const std::string& name, const fs
   fs::create_directories(out_dir);
   // The header says which masks gave the instance ids of frames.jsonl, and how many frames
   // the run read, so that eval can tell a complete frames.jsonl (both eval needs).
-  const std::string simulated =
-      fmt::format("simulated {} seed {}", SimulatedSegmenterLabel(args.segmenter, args.strength), args.seed);
-  const std::string masks = args.mode == "plain"       ? "none"
-                            : !args.segmenter.empty()  ? simulated
-                            : args.masks == "gt"       ? "gt"
-                                                       : "external " + args.masks;
   WriteTumTrajectory(out_dir / "trajectory.txt", outcome.run.trajectory,
                      fmt::format("segslam run, mode {}, sequence {}\ninstance masks: {}\nframes run: {}\n"
                                  "camera-to-world T_wc of localized frames",
-                                 args.mode, sequence_dir.string(), masks, outcome.run.frames.size()));
+                                 args.run.ModeName(), sequence_dir.string(), args.run.masks.Describe(),
+                                 outcome.run.frames.size()));
   WriteFrameLog(out_dir / "frames.jsonl", outcome.run.frames);
   if (outcome.run.segmentation.has_value()) {
     const LoopSegmentationScores& scores = *outcome.run.segmentation;
     const nlohmann::json json = {
         {"sequence", sequence_dir.string()},
         {"segmenter", scores.segmenter},
-        {"seed", args.seed},
+        {"seed", args.run.masks.seed},
         {"poses", "slam"},
         {"frames", outcome.run.frames.size()},
         {"refined_from_previous_frames", scores.refined_from_previous},
@@ -99,22 +90,14 @@ bool IsTwoPassDataset(const fs::path& dataset) {
   return fs::is_directory(dataset / "pass1") && fs::is_directory(dataset / "pass2");
 }
 
-bool RunsMutualLoop(const DatasetRunOptions& options) {
-  return options.mode == "mutual" && (!options.segmenter.empty() || options.masks != "gt");
-}
-
 SlamRunOptions SlamRunOptionsFor(const DatasetRunOptions& options) {
   SlamRunOptions slam_options;
-  slam_options.mode = mutual::ParseSlamMode(options.mode);
-  slam_options.masks = options.masks;
-  slam_options.segmenter = options.segmenter;
-  slam_options.segmenter_seed = options.seed;
-  slam_options.segmenter_strength = options.strength;
+  slam_options.run = options.run;
   slam_options.max_frames = options.frames;
   for (const std::string& assignment : options.tracker_options) {
     slam::SetTrackerOption(&slam_options.tracker, assignment);
   }
-  if (RunsMutualLoop(options)) {
+  if (options.run.RefinesMasks()) {
     for (const std::string& assignment : options.refiner_options) {
       seg::SetRefinerOption(&slam_options.refiner, assignment);
     }
@@ -123,18 +106,10 @@ SlamRunOptions SlamRunOptionsFor(const DatasetRunOptions& options) {
 }
 
 void CheckDatasetRunOptions(const DatasetRunOptions& options) {
-  mutual::ParseSlamMode(options.mode);
   slam::TrackerOptions tracker;
   for (const std::string& assignment : options.tracker_options) slam::SetTrackerOption(&tracker, assignment);
-  if (!options.segmenter.empty() && options.masks != "gt") {
-    throw Error("run: --segmenter " + options.segmenter + " and --masks " + options.masks + " exclude each other");
-  }
-  if (options.mode == "oracle" && (!options.segmenter.empty() || options.masks != "gt")) {
-    throw Error("run: mode oracle takes the dataset's ground-truth masks and tracks (the verdicts a perfect "
-                "judgement would give): no --segmenter or --masks DIR");
-  }
   if (!options.refiner_options.empty()) {
-    if (!RunsMutualLoop(options)) {
+    if (!options.run.RefinesMasks()) {
       throw Error("run: --refiner applies to the mutual loop: mode mutual with --segmenter or --masks");
     }
     seg::RefinerOptions refiner;
@@ -157,7 +132,7 @@ void WriteRunRecord(const fs::path& dir, const fs::path& dataset, const DatasetR
                        {"first_frame_sha256", pass.sequence.first_frame_sha256}});
   }
   const nlohmann::json record = {{"format", "segslam-run-1"},
-                                 {"mode", options.mode},
+                                 {"mode", options.run.ModeName()},
                                  {"dataset", dataset.string()},
                                  {"frames_per_sequence_limit", options.frames},
                                  {"passes", records}};

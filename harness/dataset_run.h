@@ -20,17 +20,14 @@
 #include <utility>
 #include <vector>
 
+#include "harness/run_config.h"
 #include "harness/slam_runner.h"
 #include "harness/trajectory_metrics.h"
 
 namespace segslam::harness {
 
 struct DatasetRunOptions {
-  std::string mode = "mutual";  // plain, mask-moveable, mutual or oracle (mutual::ParseSlamMode)
-  std::string masks = "gt";     // "gt" or a folder of external masks
-  std::string segmenter;        // simulated segmenter preset; empty = none
-  std::uint64_t seed = 1;       // the simulated segmenter's seed
-  double strength = 1.0;        // the simulated segmenter's error scale
+  RunConfig run;                  // the mode and its masks, checked (MakeRunConfig)
   std::filesystem::path map_in;   // single sequence only: localize on this map
   std::filesystem::path map_out;  // where the (pass-1) long-term map goes; empty = default
   std::string camera_file;        // camera.yaml overriding the sequence's own
@@ -38,15 +35,11 @@ struct DatasetRunOptions {
   // NAME=VALUE overrides of slam::TrackerOptions (slam/tracker_option_overrides.h).
   std::vector<std::string> tracker_options;
   // NAME=VALUE overrides of the mutual loop's seg::RefinerOptions
-  // (seg/refiner_option_overrides.h); only where the loop runs (RunsMutualLoop).
+  // (seg/refiner_option_overrides.h); only where the loop runs (RunConfig::RefinesMasks).
   std::vector<std::string> refiner_options;
   // Called after each frame with the pass's name, (done, total); may throw to cancel.
   std::function<void(const std::string&, int, int)> on_frame;
 };
-
-// A simulated segmenter preset as reports name it: "fcis-like", or "fcis-like@2" when its
-// errors are scaled (as SimulatedSegmenter::name() writes the strength).
-std::string SimulatedSegmenterLabel(const std::string& preset, double strength);
 
 // One sequence's run. `ate` is set where the sequence has ground truth and >= 3 poses
 // were estimated: pass 1 (or a single sequence) aligned by Horn's method, pass 2 moved by
@@ -71,18 +64,15 @@ struct PassRun {
 // True when `dataset` holds pass1/ and pass2/.
 bool IsTwoPassDataset(const std::filesystem::path& dataset);
 
-// The mutual loop runs (and refines masks) in mutual mode with a segmenter or external masks.
-bool RunsMutualLoop(const DatasetRunOptions& options);
-
-// The SLAM runner's options for a sequence of a run with `options`: mode, masks,
-// segmenter, frames, and the tracker's and (where the mutual loop runs) the refiner's
-// overrides. What is a pass's own (map_in, refined_masks_dir, on_frame) the caller adds.
-// Throws segslam::Error on a mode that does not exist or a bad override.
+// The SLAM runner's options for a sequence of a run with `options`: mode, masks, frames,
+// and the tracker's and (where the mutual loop runs) the refiner's overrides. What is a
+// pass's own (map_in, refined_masks_dir, on_frame) the caller adds. Throws
+// segslam::Error on a bad override.
 SlamRunOptions SlamRunOptionsFor(const DatasetRunOptions& options);
 
-// Throws segslam::Error on bad options (a mode that does not exist, an unknown tracker
-// option, --segmenter with external masks, refiner options where no loop runs or out of
-// range), so a command can refuse them before it prints or reads anything.
+// Throws segslam::Error on bad options (an unknown tracker option, refiner options where
+// no loop runs or out of range), so a command can refuse them before it prints or reads
+// anything. The mode and masks were checked when `options.run` was made.
 void CheckDatasetRunOptions(const DatasetRunOptions& options);
 
 // Runs every pass and writes the outputs above under `out_dir`, replacing an earlier run

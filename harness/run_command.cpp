@@ -31,7 +31,8 @@ namespace {
 
 struct RunArgs {
   std::string dataset;
-  DatasetRunOptions run;  // filled by the options of the same names
+  RunConfigWords words;   // --mode, --masks, --segmenter, --seed, --strength
+  DatasetRunOptions run;  // filled by the other options of the same names
   std::string out_dir;
   bool quiet = false;
 };
@@ -97,19 +98,14 @@ void PrintLoopSegmentation(const std::vector<PassRun>& passes) {
 
 int RunRun(const RunArgs& args) {
   DatasetRunOptions options = args.run;
-  CheckDatasetRunOptions(options);  // before anything is printed, read or written
-  if (options.strength != 1.0 && options.segmenter.empty()) {
-    throw Error("run: --strength scales the simulated segmenter's errors: give --segmenter too");
-  }
+  // Before anything is printed, read or written.
+  options.run = args.words.ToConfig("run");
+  CheckDatasetRunOptions(options);
   const fs::path dataset(args.dataset);
-  const fs::path out_dir = args.out_dir.empty() ? dataset / ("run_" + options.mode) : fs::path(args.out_dir);
-  const std::string simulated =
-      fmt::format("simulated {} (seed {})", SimulatedSegmenterLabel(options.segmenter, options.strength), options.seed);
-  const std::string masks = options.mode == "plain"        ? "none"
-                            : !options.segmenter.empty()   ? simulated
-                                                           : options.masks;
-  fmt::print("segslam run: mode {}, masks {}{}{}\n", options.mode, masks,
-             RunsMutualLoop(options) ? ", refined in the loop" : "",
+  const std::string mode = options.run.ModeName();
+  const fs::path out_dir = args.out_dir.empty() ? dataset / ("run_" + mode) : fs::path(args.out_dir);
+  fmt::print("segslam run: mode {}, masks {}{}{}\n", mode, options.run.masks.Describe(),
+             options.run.RefinesMasks() ? ", refined in the loop" : "",
              options.refiner_options.empty() ? ""
                                              : " with " + fmt::format("{}", fmt::join(options.refiner_options, " ")));
   // One progress bar per pass; each pass's rate counts from the end of the previous one.
@@ -122,7 +118,7 @@ int RunRun(const RunArgs& args) {
     if (args.quiet) return;
     if (!bar.has_value() || bar_pass != pass) {
       if (bar.has_value()) bar->Finish();
-      bar.emplace(fmt::format("run {} {}", options.mode, pass));
+      bar.emplace(fmt::format("run {} {}", mode, pass));
       bar_pass = pass;
     }
     const auto now = std::chrono::steady_clock::now();
@@ -149,19 +145,19 @@ void AddRunCommand(CLI::App& app, std::function<int()>* action) {
       "run", "Run the SLAM core on a sequence (TUM layout), or on both passes of a generated dataset");
   cmd->add_option("dataset", args->dataset, "A TUM-layout sequence, or a dataset with pass1/ and pass2/")
       ->required();
-  // Checked by mutual::ParseSlamMode, whose error is one line like every other.
-  cmd->add_option("--mode", args->run.mode,
+  // Checked by MakeRunConfig, whose error is one line like every other.
+  cmd->add_option("--mode", args->words.mode,
                   "plain, mask-moveable, mutual, or oracle (mutual with the true moving/static verdicts of a "
                   "generated dataset, for reference)");
-  cmd->add_option("--masks", args->run.masks,
+  cmd->add_option("--masks", args->words.masks,
                   "'gt' (the dataset's masks, used as they are) or a folder of external masks (refined in "
                   "the loop in mutual mode)");
-  cmd->add_option("--segmenter", args->run.segmenter,
+  cmd->add_option("--segmenter", args->words.segmenter,
                   "Simulated segmenter preset on the dataset's ground-truth masks (mutual: refined in the loop; "
                   "mask-moveable: raw)")
       ->check(CLI::IsMember(seg::SimulatedSegmenterOptions::PresetNames()));
-  cmd->add_option("--seed", args->run.seed, "Seed of the simulated segmenter")->capture_default_str();
-  cmd->add_option("--strength", args->run.strength,
+  cmd->add_option("--seed", args->words.seed, "Seed of the simulated segmenter")->capture_default_str();
+  cmd->add_option("--strength", args->words.strength,
                   "Scale of the simulated segmenter's errors (0 = ground truth, 1 = the preset, 2 = twice as bad)")
       ->check(NumberIn(0, 10))
       ->capture_default_str();

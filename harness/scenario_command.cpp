@@ -150,12 +150,8 @@ class RepeatRunner {
   void RunOne(std::size_t index) {
     RepeatRun& run = runs_[index];
     DatasetRunOptions options;
-    options.mode = run.mode;
-    // The oracle's verdicts are the ground truth's, and so are its masks.
-    if (run.mode != "plain" && run.mode != "oracle" && bench_.segmenter != "gt") options.segmenter = bench_.segmenter;
-    options.seed = run.seed;
-    options.strength = bench_.segmenter_strength;
-    if (run.mode == "mutual" && !options.segmenter.empty()) options.refiner_options = bench_.refiner;
+    options.run = bench_.RunConfigFor(run.mode, run.seed);
+    if (options.run.RefinesMasks()) options.refiner_options = bench_.refiner;
     options.tracker_options = bench_.tracker;
     std::optional<ProgressBar> bar;  // this run's, with one job
     std::string bar_pass;

@@ -152,11 +152,8 @@ void DrawFeatureFigure(const ScenarioReport& report, const RepeatRun& run, const
   // the segmenter's seed, so this is the same run, frame for frame, and its judgement used
   // the refined masks the run wrote.
   SlamRunOptions options;
-  options.mode = mutual::SlamMode::kMutual;
-  if (report.bench.segmenter != "gt") options.segmenter = report.bench.segmenter;
-  options.segmenter_seed = run.seed;
-  options.segmenter_strength = report.bench.segmenter_strength;
-  if (!options.segmenter.empty()) options.refiner = report.bench.LoopRefinerOptions();
+  options.run = report.bench.RunConfigFor("mutual", run.seed);
+  if (options.run.RefinesMasks()) options.refiner = report.bench.LoopRefinerOptions();
   options.max_frames = FramesRun(sequence, report);
   options.tracker = report.bench.TrackerOverrides();
   options.tracker.record_features = true;
@@ -170,12 +167,12 @@ void DrawFeatureFigure(const ScenarioReport& report, const RepeatRun& run, const
   const int frame_index = static_cast<int>(*chosen);
   const std::string stem = sequence.FrameStem(*chosen);
   const std::filesystem::path judged_masks =
-      options.segmenter.empty() ? pass_dir / "masks" / (stem + ".png")
+      !options.run.RefinesMasks() ? pass_dir / "masks" / (stem + ".png")
                                 : report.report_dir / run.run_dir / "pass1" / "refined_masks" / (stem + ".png");
   const RgbdFrame frame = sequence.LoadFrame(*chosen);
   const std::string title =
       fmt::format("{} pass 1, frame {}, mutual{}", report.scenario_name, frame_index,
-                  options.segmenter.empty() ? " on ground-truth masks" : fmt::format(" (seed {})", run.seed));
+                  !options.run.RefinesMasks() ? " on ground-truth masks" : fmt::format(" (seed {})", run.seed));
   WriteFigure(out, DrawFeatureKinds(frame.color_bgr, sequence.LoadInstanceMask(judged_masks), rerun.frames[*chosen], title));
 }
 

@@ -53,25 +53,25 @@ class FrameReader {
   std::future<RgbdFrame> next_;
 };
 
-// The segmenter the run's options name: the simulated one, an external masks folder, or
-// the dataset's ground-truth masks; none in plain mode.
+// The segmenter of the run's masks; none in plain mode.
 std::unique_ptr<seg::Segmenter> MakeSegmenter(const TumSequence& sequence, const SlamRunOptions& options) {
-  if (!mutual::UsesMasks(options.mode)) return nullptr;
-  if (!options.segmenter.empty()) {
-    if (options.masks != "gt") {
-      throw Error("run: --segmenter " + options.segmenter + " and --masks " + options.masks +
-                  " exclude each other (the simulated segmenter degrades the ground-truth masks)");
+  const MaskSource& masks = options.run.masks;
+  if (!mutual::UsesMasks(options.run.mode)) return nullptr;
+  switch (masks.kind) {
+    case MaskSource::Kind::kNone:
+      throw Error("mode " + options.run.ModeName() + " needs instance masks");
+    case MaskSource::Kind::kGroundTruth:
+      return std::make_unique<seg::GroundTruthSegmenter>(sequence);
+    case MaskSource::Kind::kExternal:
+      return std::make_unique<seg::ExternalMaskSegmenter>(masks.folder, sequence,
+                                                          static_cast<size_t>(std::max(0, options.max_frames)));
+    case MaskSource::Kind::kSimulated: {
+      seg::SimulatedSegmenterOptions preset = seg::SimulatedSegmenterOptions::Preset(masks.preset);
+      preset.strength = masks.strength;
+      return std::make_unique<seg::SimulatedSegmenter>(sequence.dir(), preset, masks.seed, masks.preset);
     }
-    seg::SimulatedSegmenterOptions preset = seg::SimulatedSegmenterOptions::Preset(options.segmenter);
-    preset.strength = options.segmenter_strength;
-    return std::make_unique<seg::SimulatedSegmenter>(sequence.dir(), preset, options.segmenter_seed,
-                                                     options.segmenter);
   }
-  if (options.masks != "gt") {
-    return std::make_unique<seg::ExternalMaskSegmenter>(options.masks, sequence,
-                                                        static_cast<size_t>(std::max(0, options.max_frames)));
-  }
-  return std::make_unique<seg::GroundTruthSegmenter>(sequence);
+  return nullptr;
 }
 
 // Raw and refined masks of the mutual loop against the sequence's ground truth, where it
@@ -117,17 +117,17 @@ double SlamRunResult::MedianTrackingMs() const {
 }
 
 SlamRunResult RunSlamOnSequence(const TumSequence& sequence, const SlamRunOptions& options) {
-  if (options.mode == mutual::SlamMode::kOracle && (!options.segmenter.empty() || options.masks != "gt")) {
+  const RunConfig& run = options.run;
+  if (run.mode == mutual::SlamMode::kOracle && run.masks.kind != MaskSource::Kind::kGroundTruth) {
     throw Error("mode oracle takes the dataset's ground-truth masks, whose ids the ground-truth tracks name: "
                 "no segmenter or external masks");
   }
   const std::unique_ptr<seg::Segmenter> segmenter = MakeSegmenter(sequence, options);
   std::optional<seg::GroundTruthMotion> motion;
-  if (options.mode == mutual::SlamMode::kOracle) motion.emplace(sequence.dir());
+  if (run.mode == mutual::SlamMode::kOracle) motion.emplace(sequence.dir());
   mutual::FramePipelineOptions pipeline_options;
-  pipeline_options.mode = options.mode;
-  // Ground-truth masks have nothing to repair.
-  pipeline_options.refine_masks = !options.segmenter.empty() || options.masks != "gt";
+  pipeline_options.mode = run.mode;
+  pipeline_options.refine_masks = run.RefinesMasks();
   pipeline_options.tracker = options.tracker;
   pipeline_options.refiner = options.refiner;
   mutual::FramePipeline pipeline(sequence.camera().intrinsics, pipeline_options, segmenter.get(),
@@ -135,7 +135,7 @@ SlamRunResult RunSlamOnSequence(const TumSequence& sequence, const SlamRunOption
   if (!options.map_in.empty()) {
     pipeline.LoadLongTermMap(slam::LoadLongTermMap(options.map_in), options.map_in.string());
   }
-  const bool refines = options.mode == mutual::SlamMode::kMutual && pipeline_options.refine_masks;
+  const bool refines = run.RefinesMasks();
   std::optional<LoopSegmentationScorer> scorer;
   LoopSegmentationScores loop_scores;
   if (refines) {
@@ -183,7 +183,7 @@ SlamRunResult RunSlamOnSequence(const TumSequence& sequence, const SlamRunOption
   result.trajectory = pipeline.trajectory();
   result.long_term_map = pipeline.ExportLongTermMap();
   result.long_term_map.description = "segslam long-term map of " + sequence.dir().string() + ", mode " +
-                                     mutual::ToString(options.mode) +
+                                     run.ModeName() +
                                      (refines ? ", segmenter " + segmenter->name() : std::string());
   result.keyframes = static_cast<int>(pipeline.tracker().map().keyframes().size());
   result.map_points = static_cast<int>(pipeline.tracker().map().NumGoodPoints());

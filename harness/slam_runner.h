@@ -20,6 +20,7 @@
 #include "core/pose.h"
 #include "core/tum_dataset.h"
 #include "mutual/frame_pipeline.h"
+#include "harness/run_config.h"
 #include "mutual/slam_mode.h"
 #include "seg/metrics.h"
 #include "slam/map_file.h"
@@ -28,19 +29,9 @@
 namespace segslam::harness {
 
 struct SlamRunOptions {
-  mutual::SlamMode mode = mutual::SlamMode::kPlain;
-  // "gt": <sequence>/masks/<stem>.png with <sequence>/instances.json; otherwise a folder
-  // of external masks (seg/external_masks.h). Unused in plain mode; the oracle takes
-  // "gt" only, with <sequence>/tracks.json for which instances move.
-  std::string masks = "gt";
-  // A simulated segmenter preset (seg/simulated_segmenter.h: clean, fcis-like,
-  // mask-rcnn-like, poor) instead of `masks` (which must then stay "gt"); empty = none.
-  // mask-moveable drops features on its raw masks; mutual refines them in the loop.
-  std::string segmenter;
-  std::uint64_t segmenter_seed = 1;
-  // Scales every error of the simulated segmenter (SimulatedSegmenterOptions::strength):
-  // 0 = ground truth, 1 = the preset, 2 = twice as bad.
-  double segmenter_strength = 1.0;
+  // The mode and its masks (harness/run_config.h); plain by default. The oracle also reads
+  // <sequence>/tracks.json for which instances move.
+  RunConfig run{mutual::SlamMode::kPlain, MaskSource{}};
   // The loop's refiner options (mutual mode with a segmenter).
   seg::RefinerOptions refiner;
   // Where the loop writes each frame's refined masks, in the external-mask layout
@@ -83,8 +74,8 @@ struct SlamRunResult {
   double MedianTrackingMs() const;
 };
 
-// Throws segslam::Error naming the file on unreadable frames, masks or map files, and
-// segslam::Error on `segmenter` together with external `masks` or an unknown preset.
+// Throws segslam::Error naming the file on unreadable frames, masks, tracks or map files,
+// and segslam::Error on a mode without the masks it needs (the oracle: the ground truth's).
 SlamRunResult RunSlamOnSequence(const TumSequence& sequence, const SlamRunOptions& options);
 
 // frames.jsonl: one JSON object per frame.

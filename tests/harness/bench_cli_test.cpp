@@ -62,10 +62,10 @@ TEST_F(BenchCliTest, MutualLoopWithASegmenterTimesTheMaskRefinement) {
   const CommandOutput out = Run("bench slam " + sequence.string() +
                                 " --mode mutual --segmenter fcis-like --frames 12 --json " + json_file.string());
   ASSERT_EQ(out.exit_code, 0) << out.stderr_text;
-  EXPECT_NE(out.stdout_text.find("masks segmenter fcis-like"), std::string::npos) << out.stdout_text;
+  EXPECT_NE(out.stdout_text.find("masks simulated fcis-like seed 1"), std::string::npos) << out.stdout_text;
   EXPECT_NE(out.stdout_text.find("mask refinement"), std::string::npos) << out.stdout_text;
   const nlohmann::json json = nlohmann::json::parse(ReadText(json_file));
-  EXPECT_EQ(json.at("masks"), "segmenter fcis-like");
+  EXPECT_EQ(json.at("masks"), "simulated fcis-like seed 1");
   EXPECT_GT(json.at("stages_ms").at("mask refinement").at("median").get<double>(), 0.0);
   EXPECT_GT(json.at("stages_ms").at("judge").at("median").get<double>(), 0.0);
 

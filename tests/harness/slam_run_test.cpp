@@ -58,7 +58,7 @@ Scored RunAndScore(const fs::path& sequence_dir, mutual::SlamMode mode, const fs
                    const std::optional<Eigen::Isometry3d>& fixed_alignment = std::nullopt) {
   const TumSequence sequence = TumSequence::Open(sequence_dir);
   SlamRunOptions options;
-  options.mode = mode;
+  options.run.mode = mode;
   options.map_in = map_in;
   Scored scored;
   scored.run = RunSlamOnSequence(sequence, options);
@@ -198,11 +198,15 @@ TEST(SlamRunTest, OracleRefusesMasksWithoutGroundTruthIdentity) {
   const fs::path dir = kDataDir / "office_seg" / "pass1";
   RequireDataset(dir);
   SlamRunOptions options;
-  options.mode = mutual::SlamMode::kOracle;
   options.max_frames = 2;
-  options.segmenter = "fcis-like";
+  // MakeRunConfig refuses the pair where a command builds it; the runner too.
+  EXPECT_THROW(MakeRunConfig("run", "oracle", "gt", "fcis-like", 1, 1.0), Error);
+  EXPECT_THROW(MakeRunConfig("run", "oracle", dir.string(), "", 1, 1.0), Error);
+  options.run.mode = mutual::SlamMode::kOracle;
+  options.run.masks.kind = MaskSource::Kind::kSimulated;
+  options.run.masks.preset = "fcis-like";
   EXPECT_THROW(RunSlamOnSequence(TumSequence::Open(dir), options), Error);
-  options.segmenter.clear();
+  options.run.masks = MaskSource{};
 
   // The same sequence without its tracks.
   const fs::path copy = ScratchPath("no_tracks");
@@ -379,8 +383,7 @@ TEST(SlamRunTest, MasksOfADistortedSequenceAreReadAndWrittenOnItsStoredImages) {
   }
 
   SlamRunOptions options;
-  options.mode = mutual::SlamMode::kMutual;
-  options.masks = masks_dir.string();
+  options.run = MakeRunConfig("run", "mutual", masks_dir.string(), "", 1, 1.0);
   options.refined_masks_dir = scratch / "refined";
   fs::create_directories(options.refined_masks_dir);
   const TumSequence sequence = TumSequence::Open(copy);
@@ -468,8 +471,7 @@ TEST(SlamRunTest, UnreadableFrameStopsTheRunNamingTheFile) {
   for (const char* segmenter : {"", "fcis-like"}) {
     for (const bool read_ahead : {true, false}) {
       SlamRunOptions options;
-      options.mode = *segmenter != 0 ? mutual::SlamMode::kMutual : mutual::SlamMode::kPlain;
-      options.segmenter = segmenter;
+      options.run = MakeRunConfig("run", *segmenter != 0 ? "mutual" : "plain", "gt", segmenter, 1, 1.0);
       options.max_frames = 10;
       options.read_ahead = read_ahead;
       const std::string which = std::string(segmenter) + (read_ahead ? " reading ahead" : " reading in turn");

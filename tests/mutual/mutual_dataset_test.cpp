@@ -40,9 +40,7 @@ LoopRun RunLoop(const fs::path& sequence_dir, const std::string& segmenter, cons
                 int max_frames = 0) {
   const TumSequence sequence = TumSequence::Open(sequence_dir);
   SlamRunOptions options;
-  options.mode = mutual::SlamMode::kMutual;
-  options.segmenter = segmenter;
-  options.segmenter_seed = 1;
+  options.run = MakeRunConfig("run", "mutual", "gt", segmenter, 1, 1.0);
   options.refined_masks_dir = refined_masks_dir;
   options.max_frames = max_frames;
   LoopRun loop;

@@ -1,0 +1,73 @@
+#include "harness/run_config.h"
+
+#include <fmt/format.h>
+
+#include "core/error.h"
+#include "core/strings.h"
+#include "seg/simulated_segmenter_options.h"
+
+namespace segslam::harness {
+
+std::string MaskSource::Describe() const {
+  switch (kind) {
+    case Kind::kNone: return "none";
+    case Kind::kGroundTruth: return "gt";
+    case Kind::kExternal: return "external " + folder.string();
+    case Kind::kSimulated: return fmt::format("simulated {} seed {}", SimulatedSegmenterLabel(preset, strength), seed);
+  }
+  return "?";
+}
+
+bool RunConfig::RefinesMasks() const {
+  return mode == mutual::SlamMode::kMutual &&
+         (masks.kind == MaskSource::Kind::kExternal || masks.kind == MaskSource::Kind::kSimulated);
+}
+
+bool RunConfig::IsDeterministic() const { return masks.kind != MaskSource::Kind::kSimulated; }
+
+std::string SimulatedSegmenterLabel(const std::string& preset, double strength) {
+  return strength == 1.0 ? preset : fmt::format("{}@{}", preset, strength);
+}
+
+RunConfig MakeRunConfig(const std::string& command, const std::string& mode, const std::string& masks,
+                        const std::string& segmenter, std::uint64_t seed, double strength) {
+  const std::string where = command + ": ";
+  RunConfig config;
+  try {
+    config.mode = mutual::ParseSlamMode(mode);
+  } catch (const Error& e) {
+    throw Error(where + e.what());
+  }
+  if (!(strength >= 0 && strength <= 10)) {
+    throw Error(where + fmt::format("--strength must be in [0, 10] (got {})", strength));
+  }
+  if (!segmenter.empty() && !Contains(seg::SimulatedSegmenterOptions::PresetNames(), segmenter)) {
+    throw Error(where + "unknown segmenter '" + PrintableText(segmenter) + "' (" +
+                Join(seg::SimulatedSegmenterOptions::PresetNames(), ", ") + ")");
+  }
+  if (!segmenter.empty() && masks != "gt") {
+    throw Error(where + "--segmenter " + segmenter + " and --masks " + PrintableText(masks) +
+                " exclude each other (the simulated segmenter degrades the ground-truth masks)");
+  }
+  if (strength != 1.0 && segmenter.empty()) {
+    throw Error(where + "--strength scales the simulated segmenter's errors: give --segmenter too");
+  }
+  if (config.mode == mutual::SlamMode::kOracle && (!segmenter.empty() || masks != "gt")) {
+    throw Error(where + "mode oracle takes the dataset's ground-truth masks and tracks (the verdicts a perfect "
+                        "judgement would give): no --segmenter or --masks DIR");
+  }
+  if (!mutual::UsesMasks(config.mode)) {
+    config.masks.kind = MaskSource::Kind::kNone;
+  } else if (!segmenter.empty()) {
+    config.masks.kind = MaskSource::Kind::kSimulated;
+    config.masks.preset = segmenter;
+    config.masks.seed = seed;
+    config.masks.strength = strength;
+  } else if (masks != "gt") {
+    config.masks.kind = MaskSource::Kind::kExternal;
+    config.masks.folder = masks;
+  }
+  return config;
+}
+
+}  // namespace segslam::harness
