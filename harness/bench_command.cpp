@@ -14,7 +14,9 @@
 #include "harness/progress_bar.h"
 #include "harness/slam_runner.h"
 #include "slam/tracker.h"
+#include "slam/tracker_options.h"
 #include "scenes/scenario.h"
+#include "seg/refiner_options.h"
 #include "seg/simulated_segmenter.h"
 #include "sim/dataset_generator.h"
 
@@ -187,7 +189,9 @@ int RunBenchSlam(const BenchSlamArgs& bench_args) {
                          {"features_requested", options.tracker.orb.max_features},
                          {"tracker_options", args.run.tracker_options},
                          {"refiner_options", args.run.refiner_options},
+                         {"options", {{"tracker", slam::TrackerOptionRegistry().ToJson(options.tracker)}}},
                          {"machine", machine}};
+  if (args.run.run.RefinesMasks()) json["options"]["refiner"] = seg::RefinerOptionRegistry().ToJson(options.refiner);
   for (const auto& [name, values] : stages) {
     const TimeSummary s = Summarize(values);
     fmt::print("{:<26} {:>10.2f} {:>10.2f} {:>10.2f}\n", name, s.median, s.p90, s.mean);
@@ -243,9 +247,9 @@ void AddBenchCommand(CLI::App& app, std::function<int()>* action) {
   slam->add_option("--camera", slam_args->run.camera_file,
                    "camera.yaml to use instead of the sequence's own (for a real sequence without one)");
   slam->add_option("--tracker", slam_args->run.tracker_options,
-                   "Override a tracker option, NAME=VALUE (repeatable; see slam/tracker.h), e.g. orb.max_features=2000");
+                   "Override a tracker option, NAME=VALUE (repeatable; `segslam options tracker` lists them), e.g. orb.max_features=2000");
   slam->add_option("--refiner", slam_args->run.refiner_options,
-                   "Override a refinement option of the mutual loop, NAME=VALUE (repeatable; see seg/refiner.h)");
+                   "Override a refinement option of the mutual loop, NAME=VALUE (repeatable; `segslam options refiner` lists them)");
   slam->callback([slam_args, action] { *action = [slam_args] { return RunBenchSlam(*slam_args); }; });
 
   AddBenchAliasingCommand(*bench, action);

@@ -9,9 +9,9 @@
 #include "core/error.h"
 #include "core/strings.h"
 #include "harness/dataset_run.h"
-#include "seg/refiner_option_overrides.h"
+#include "seg/refiner_options.h"
 #include "seg/simulated_segmenter.h"
-#include "slam/tracker_option_overrides.h"
+#include "slam/tracker_options.h"
 
 namespace segslam::harness {
 

@@ -28,11 +28,11 @@ struct BenchSettings {
   // twice as bad; a sweep axis for segmentation error strength. [0, 10].
   double segmenter_strength = 1.0;
   std::uint64_t seed = 1;  // repeat r (0-based) uses seed + r
-  // "name=value" overrides of the mutual loop's refinement (seg/refiner_option_overrides.h),
+  // "name=value" overrides of the mutual loop's refinement (seg/refiner_options.h),
   // from `refiner: {name: value, ...}`; a sweep axis as bench.refiner.NAME. Only the loop
   // refines, so they need a simulated segmenter.
   std::vector<std::string> refiner;
-  // "name=value" overrides of the tracker (slam/tracker_option_overrides.h) in every
+  // "name=value" overrides of the tracker (slam/tracker_options.h) in every
   // mode, from `tracker: {name: value, ...}`; nested names as orb: {max_features: 1500}
   // or orb.max_features. A sweep axis as bench.tracker.NAME.
   std::vector<std::string> tracker;

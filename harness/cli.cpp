@@ -84,6 +84,7 @@ int RunCli(int argc, char** argv) {
   AddScenarioCommand(app, &action);
   AddSweepCommand(app, &action);
   AddMasksCommand(app, &action);
+  AddOptionsCommand(app, &action);
 
   try {
     app.parse(argc, argv);

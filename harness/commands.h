@@ -20,6 +20,7 @@ void AddEvalCommand(CLI::App& app, std::function<int()>* action);
 void AddScenarioCommand(CLI::App& app, std::function<int()>* action);
 void AddSweepCommand(CLI::App& app, std::function<int()>* action);
 void AddMasksCommand(CLI::App& app, std::function<int()>* action);
+void AddOptionsCommand(CLI::App& app, std::function<int()>* action);
 // `scenario suite`, added under the `scenario` subcommand by AddScenarioCommand.
 void AddSuiteCommand(CLI::App& scenario, std::function<int()>* action);
 

@@ -10,8 +10,8 @@
 #include "core/json_file.h"
 #include "core/manifest.h"
 #include "core/output_folders.h"
-#include "seg/refiner_option_overrides.h"
-#include "slam/tracker_option_overrides.h"
+#include "seg/refiner_options.h"
+#include "slam/tracker_options.h"
 
 namespace segslam::harness {
 
@@ -131,10 +131,16 @@ void WriteRunRecord(const fs::path& dir, const fs::path& dataset, const DatasetR
                        {"first_frame", pass.sequence.first_frame},
                        {"first_frame_sha256", pass.sequence.first_frame_sha256}});
   }
+  // Every tunable as the run used it; the refiner's only where the loop refined masks.
+  const SlamRunOptions used = SlamRunOptionsFor(options);
+  nlohmann::json effective = {{"tracker", slam::TrackerOptionRegistry().ToJson(used.tracker)}};
+  if (options.run.RefinesMasks()) effective["refiner"] = seg::RefinerOptionRegistry().ToJson(used.refiner);
   const nlohmann::json record = {{"format", "segslam-run-1"},
                                  {"mode", options.run.ModeName()},
+                                 {"masks", options.run.masks.Describe()},
                                  {"dataset", dataset.string()},
                                  {"frames_per_sequence_limit", options.frames},
+                                 {"options", effective},
                                  {"passes", records}};
   WriteFileAtomically(dir / kRunRecordFile, record.dump(2) + "\n");
 }

@@ -32,10 +32,10 @@ struct DatasetRunOptions {
   std::filesystem::path map_out;  // where the (pass-1) long-term map goes; empty = default
   std::string camera_file;        // camera.yaml overriding the sequence's own
   int frames = 0;                 // first N frames of each sequence (0 = all)
-  // NAME=VALUE overrides of slam::TrackerOptions (slam/tracker_option_overrides.h).
+  // NAME=VALUE overrides of slam::TrackerOptions (slam/tracker_options.h).
   std::vector<std::string> tracker_options;
   // NAME=VALUE overrides of the mutual loop's seg::RefinerOptions
-  // (seg/refiner_option_overrides.h); only where the loop runs (RunConfig::RefinesMasks).
+  // (seg/refiner_options.h); only where the loop runs (RunConfig::RefinesMasks).
   std::vector<std::string> refiner_options;
   // Called after each frame with the pass's name, (done, total); may throw to cancel.
   std::function<void(const std::string&, int, int)> on_frame;

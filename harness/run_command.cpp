@@ -169,9 +169,9 @@ void AddRunCommand(CLI::App& app, std::function<int()>* action) {
   cmd->add_option("--camera", args->run.camera_file,
                   "camera.yaml to use instead of the sequence's own (for a real sequence without one)");
   cmd->add_option("--tracker", args->run.tracker_options,
-                  "Override a tracker option, NAME=VALUE (repeatable; see slam/tracker.h)");
+                  "Override a tracker option, NAME=VALUE (repeatable; `segslam options tracker` lists them)");
   cmd->add_option("--refiner", args->run.refiner_options,
-                  "Override a refinement option of the mutual loop, NAME=VALUE (repeatable; see seg/refiner.h)");
+                  "Override a refinement option of the mutual loop, NAME=VALUE (repeatable; `segslam options refiner` lists them)");
   cmd->add_flag("-q,--quiet", args->quiet, "No progress bar");
   cmd->callback([args, action] { *action = [args] { return RunRun(*args); }; });
 }

@@ -14,6 +14,8 @@
 #include "harness/run_evaluation.h"
 #include "harness/scenario_figures.h"
 #include "mutual/slam_mode.h"
+#include "seg/refiner_options.h"
+#include "slam/tracker_options.h"
 
 namespace segslam::harness {
 
@@ -266,6 +268,9 @@ nlohmann::json ScenarioReport::ToJson() const {
        {{"modes", bench.modes}, {"repeats", bench.repeats}, {"segmenter", bench.segmenter},
         {"segmenter_strength", bench.segmenter_strength}, {"seed", bench.seed}, {"refiner", bench.refiner},
         {"tracker", bench.tracker}}},
+      {"options",
+       {{"tracker", slam::TrackerOptionRegistry().ToJson(bench.TrackerOverrides())},
+        {"refiner", seg::RefinerOptionRegistry().ToJson(bench.LoopRefinerOptions())}}},
       {"seconds", seconds},
       {"runs", nlohmann::json::array()},
       {"summary", nlohmann::json::object()},
@@ -299,6 +304,23 @@ nlohmann::json ScenarioReport::ToJson() const {
   }
   return json;
 }
+
+namespace {
+
+// Name, value (starred where it is not the default), range and unit of every option.
+template <typename Options>
+ReportTable OptionsTable(const OptionRegistry<Options>& registry, const Options& used, const std::string& what) {
+  const Options defaults;
+  ReportTable table{what + " options", {"option", "value", "range"}, {}};
+  for (const auto& spec : registry.specs()) {
+    const double value = spec.get(used);
+    table.rows.push_back({spec.name, FormatOptionValue(value) + (value != spec.get(defaults) ? " *" : ""),
+                          registry.RangeText(spec)});
+  }
+  return table;
+}
+
+}  // namespace
 
 ReportDocument ScenarioReport::ToDocument() const {
   ReportDocument document("segslam scenario report: " + scenario_name);
@@ -339,6 +361,12 @@ ReportDocument ScenarioReport::ToDocument() const {
   document.AddHeading("Effective scenario", 3);
   document.AddParagraph("scenario.yaml beside this report holds every key of the scenario that ran, defaults and "
                         "--set overrides included (also in results.json).");
+  document.AddHeading("Effective options", 3);
+  document.AddParagraph("Every tunable of the tracker (every mode) and of the mutual loop's mask refinement as these "
+                        "runs used them (results.json: options); * marks a value the bench: section set. "
+                        "`segslam options tracker` and `segslam options refiner` say what each does.");
+  document.AddTable(OptionsTable(slam::TrackerOptionRegistry(), bench.TrackerOverrides(), "tracker"));
+  document.AddTable(OptionsTable(seg::RefinerOptionRegistry(), bench.LoopRefinerOptions(), "refiner"));
   return document;
 }
 

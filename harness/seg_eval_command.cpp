@@ -15,7 +15,7 @@
 #include "seg/external_masks.h"
 #include "seg/metrics.h"
 #include "seg/refiner.h"
-#include "seg/refiner_option_overrides.h"
+#include "seg/refiner_options.h"
 #include "seg/sequence_evaluation.h"
 #include "seg/simulated_segmenter.h"
 
@@ -185,7 +185,7 @@ void AddSegEvalCommand(CLI::App& app, std::function<int()>* action) {
   command->add_option("--segmenter-option", args->segmenter_options,
                       "Override a simulated segmenter option, NAME=VALUE (repeatable; see seg/simulated_segmenter.h)");
   command->add_option("--refiner", args->refiner_options,
-                      "Override a refiner option, NAME=VALUE (repeatable; see seg/refiner.h)");
+                      "Override a refiner option, NAME=VALUE (repeatable; `segslam options refiner` lists them)");
   command->add_option("--out,-o", args->out_dir, "Where to write seg_eval.json and pictures "
                                               "(default: DATASET/seg_eval)");
   command->callback([args, action] { *action = [args] { return RunSegEval(*args); }; });

@@ -11,6 +11,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/error.h"
+#include "seg/refiner_options.h"
 
 namespace segslam::seg {
 namespace {
@@ -112,70 +113,10 @@ struct Splat {
 }  // namespace
 
 bool RefinerOptions::IsValid(std::string* error) const {
-  auto fail = [&](const std::string& message) {
-    if (error) *error = message;
-    return false;
-  };
-  auto finite = [](double x) { return std::isfinite(x); };
-  if (!finite(w_barycenter) || w_barycenter < 0) return fail("w_barycenter must be >= 0");
-  if (!finite(w_shape) || w_shape < 0) return fail("w_shape must be >= 0");
-  if (w_barycenter == 0 && w_shape == 0) {
-    return fail("w_barycenter and w_shape must not both be 0");
-  }
-  if (!finite(max_match_cost) || max_match_cost <= 0) {
-    return fail("max_match_cost must be > 0");
-  }
-  if (!finite(splat_footprint_scale) || splat_footprint_scale < 0.5 ||
-      splat_footprint_scale > 3) {
-    return fail("splat_footprint_scale must lie in [0.5, 3]");
-  }
-  if (hole_fill_iterations < 0 || hole_fill_iterations > 8) {
-    return fail("hole_fill_iterations must lie in [0, 8]");
-  }
-  if (!finite(depth_tolerance) || depth_tolerance < 0 || depth_tolerance >= 1) {
-    return fail("depth_tolerance must lie in [0, 1)");
-  }
-  if (!finite(occlusion_tolerance) || occlusion_tolerance < 0 || occlusion_tolerance >= 1) {
-    return fail("occlusion_tolerance must lie in [0, 1)");
-  }
-  if (!finite(min_depth_m) || min_depth_m <= 0) return fail("min_depth_m must be > 0");
-  if (min_projected_area_px < 0) return fail("min_projected_area_px must be >= 0");
-  if (min_far_projected_area_px < 0) return fail("min_far_projected_area_px must be >= 0");
-  if (!finite(replace_min_ratio_gap) || replace_min_ratio_gap < 0 ||
-      replace_min_ratio_gap >= 1) {
-    return fail("replace_min_ratio_gap must lie in [0, 1)");
-  }
-  if (min_matched_area_px < 0) return fail("min_matched_area_px must be >= 0");
-  if (boundary_tolerance_px < 0 || boundary_tolerance_px > 16) {
-    return fail("boundary_tolerance_px must lie in [0, 16]");
-  }
-  if (!finite(min_new_region_score) || min_new_region_score < 0 || min_new_region_score > 1) {
-    return fail("min_new_region_score must lie in [0, 1]");
-  }
-  if (!finite(matched_previous_score_weight) || matched_previous_score_weight < 0 ||
-      matched_previous_score_weight > 1) {
-    return fail("matched_previous_score_weight must lie in [0, 1]");
-  }
-  if (!finite(new_region_score_factor) || new_region_score_factor <= 0 ||
-      new_region_score_factor > 1) {
-    return fail("new_region_score_factor must lie in (0, 1]");
-  }
-  if (!finite(repair_min_current_inside) || repair_min_current_inside <= 0 ||
-      repair_min_current_inside > 1) {
-    return fail("repair_min_current_inside must lie in (0, 1]");
-  }
-  if (!finite(repair_max_projected_covered) || repair_max_projected_covered <= 0 ||
-      repair_max_projected_covered > 1) {
-    return fail("repair_max_projected_covered must lie in (0, 1]");
-  }
-  if (min_detections_to_add < 1) return fail("min_detections_to_add must be >= 1");
-  if (!finite(added_score_decay) || added_score_decay <= 0 || added_score_decay > 1) {
-    return fail("added_score_decay must lie in (0, 1]");
-  }
-  if (!finite(min_added_score) || min_added_score < 0 || min_added_score > 1) {
-    return fail("min_added_score must lie in [0, 1]");
-  }
-  return true;
+  std::string problem = RefinerOptionRegistry().Check(*this);
+  if (problem.empty() && w_barycenter == 0 && w_shape == 0) problem = "w_barycenter and w_shape must not both be 0";
+  if (error != nullptr) *error = problem;
+  return problem.empty();
 }
 
 // Z-buffer and label image (region index + 1) shared by all regions of one projection.

@@ -186,7 +186,8 @@ struct RefinerOptions {
   // first frame and clean input (scores 1) are unaffected.
   double min_new_region_score = 0.35;
 
-  // False (and the reason in *error when given) for any value out of its range.
+  // False (and the reason in *error when given) for a value outside its range
+  // (seg/refiner_options.h) or weights that are both 0.
   bool IsValid(std::string* error) const;
 };
 

@@ -24,7 +24,7 @@ int Tracker::Impl::OptimizeCurrentPose(bool skip_excluded, bool discard_outliers
   std::vector<int> feature_of;
   const std::vector<PoseObservation> observations = Observations(current, &feature_of, skip_excluded);
   if (observations.size() < 3) return 0;
-  PoseOptimizerOptions pose_options;
+  PoseOptimizerOptions pose_options = options.pose_optimizer;
   pose_options.bf = bf;
   const PoseOptimizationResult optimized = OptimizePose(current.T_cw, observations, camera, pose_options);
   current.T_cw = optimized.T_cw;

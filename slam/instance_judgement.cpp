@@ -22,7 +22,7 @@ std::optional<Eigen::Isometry3d> Tracker::Impl::BackgroundPose(
     return id != 0 && moveable_ids.count(id) > 0 ? nullptr : MatchedPoint(i);
   });
   if (static_cast<int>(observations.size()) < options.min_tracking_inliers) return std::nullopt;
-  PoseOptimizerOptions pose_options;
+  PoseOptimizerOptions pose_options = options.pose_optimizer;
   pose_options.bf = bf;
   const PoseOptimizationResult optimized = OptimizePose(current.T_cw, observations, camera, pose_options);
   const auto inliers = std::count(optimized.inlier.begin(), optimized.inlier.end(), true);

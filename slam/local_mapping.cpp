@@ -199,8 +199,9 @@ void Tracker::Impl::LocalBundleAdjustment() {
   if (window.size() < 2) return;
   const LocalBaProblem problem = MakeLocalBaProblem(window);
   if (problem.observations.empty()) return;
-  BundleAdjustmentOptions ba_options;
+  BundleAdjustmentOptions ba_options = options.bundle_adjustment;
   ba_options.bf = bf;
+  ba_options.threads = 1;
   ApplyLocalBa(problem,
                RunBundleAdjustment(camera, problem.keyframes, problem.positions, problem.observations, ba_options));
   // The current frame's pose moves with its keyframe.

@@ -9,6 +9,7 @@
 
 #include "core/error.h"
 #include "slam/tracker_internal.h"
+#include "slam/tracker_options.h"
 
 namespace segslam::slam {
 
@@ -61,43 +62,10 @@ std::vector<FeatureRecord> Tracker::Impl::FeatureRecords() const {
 
 namespace {
 
-// The options a wrong value would turn into a crash or into nonsense deep inside a run
-// (an infinite stereo weight, an empty first map), refused up front by name.
+// Every option within its range (slam/tracker_options.h), refused up front by name
+// rather than turning into a crash or nonsense deep inside a run.
 void CheckTrackerOptions(const TrackerOptions& options) {
-  auto require = [](bool holds, const char* name, double value, const char* what) {
-    if (!holds) throw Error(fmt::format("tracker option {} = {}: {}", name, value, what));
-  };
-  require(options.depth_sigma_at_1m > 0 && std::isfinite(options.depth_sigma_at_1m), "depth_sigma_at_1m",
-          options.depth_sigma_at_1m, "must be a positive depth noise");
-  require(options.max_point_depth_m > 0, "max_point_depth_m", options.max_point_depth_m, "must be positive");
-  require(options.instance_margin_px >= 0, "instance_margin_px", options.instance_margin_px, "must be >= 0");
-  require(options.min_initial_map_features >= 1, "min_initial_map_features", options.min_initial_map_features,
-          "a map needs at least one point");
-  require(options.min_tracking_inliers >= 1, "min_tracking_inliers", options.min_tracking_inliers, "must be >= 1");
-  require(options.local_ba_keyframes >= 1, "local_ba_keyframes", options.local_ba_keyframes, "must be >= 1");
-  require(options.keyframe_tracked_ratio > 0 && options.keyframe_tracked_ratio <= 1, "keyframe_tracked_ratio",
-          options.keyframe_tracked_ratio, "must be in (0, 1]");
-  require(options.projection_ratio > 0 && options.projection_ratio <= 1, "projection_ratio", options.projection_ratio,
-          "must be in (0, 1]");
-  require(options.relocalization_ratio > 0 && options.relocalization_ratio <= 1, "relocalization_ratio",
-          options.relocalization_ratio, "must be in (0, 1]");
-  require(options.last_frame_radius_px > 0, "last_frame_radius_px", options.last_frame_radius_px, "must be positive");
-  require(options.local_map_radius_px > 0, "local_map_radius_px", options.local_map_radius_px, "must be positive");
-  require(options.motion_baseline_s >= 0, "motion_baseline_s", options.motion_baseline_s, "must be >= 0");
-  require(options.min_long_term_inliers >= 1, "min_long_term_inliers", options.min_long_term_inliers, "must be >= 1");
-  require(options.min_rival_consensus >= 4, "min_rival_consensus", options.min_rival_consensus,
-          "must be >= 4 (a PnP pose needs four points)");
-  require(options.rival_pose_distance_m >= 0, "rival_pose_distance_m", options.rival_pose_distance_m, "must be >= 0");
-  require(options.relocalization_ransac_iterations >= 1, "relocalization_ransac_iterations",
-          options.relocalization_ransac_iterations, "must be >= 1");
-  require(options.rival_support_ratio > 0, "rival_support_ratio", options.rival_support_ratio,
-          "must be positive (above 1: never refuse a relocalization for a rival)");
-  require(options.off_map_relocalization_interval_s >= 0, "off_map_relocalization_interval_s",
-          options.off_map_relocalization_interval_s, "must be >= 0");
-  require(options.relocalization_probation_s >= 0, "relocalization_probation_s", options.relocalization_probation_s,
-          "must be >= 0 (0: no re-check)");
-  require(options.relocalization_recheck_margin >= 1, "relocalization_recheck_margin",
-          options.relocalization_recheck_margin, "must be >= 1 (below 1 a weaker pose would replace a stronger)");
+  if (const std::string problem = TrackerOptionRegistry().Check(options); !problem.empty()) throw Error(problem);
 }
 
 }  // namespace

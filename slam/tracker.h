@@ -39,9 +39,11 @@
 
 #include "core/camera.h"
 #include "core/frame.h"
+#include "slam/bundle_adjustment.h"
 #include "slam/map.h"
 #include "slam/map_file.h"
 #include "slam/orb_extractor.h"
+#include "slam/pose_optimizer.h"
 
 namespace segslam::slam {
 
@@ -195,6 +197,11 @@ struct TrackerOptions {
   // Local bundle adjustment over the latest keyframes.
   bool local_bundle_adjustment = true;
   int local_ba_keyframes = 7;
+  // The robust pose optimisation of every tracking stage and the local bundle
+  // adjustment; their `bf` is set from depth_sigma_at_1m, and the adjustment runs on one
+  // thread (Ceres's threads would sum in another order each run).
+  PoseOptimizerOptions pose_optimizer;
+  BundleAdjustmentOptions bundle_adjustment;
   // Instance judgement (step 3): a feature is moving when its 3-D position disagrees
   // with its match (map point, or the same instance's feature motion_baseline_s back) by more
   // than moving_distance_m + moving_distance_per_m * depth; without depth, when its

@@ -98,7 +98,7 @@ TEST_F(BenchCliTest, SlamTakesTrackerAndRefinerOptions) {
 
   for (const auto& [arguments, message] :
        {std::pair<std::string, std::string>{" --mode plain --refiner depth_tolerance=0.1", "applies to the mutual loop"},
-        {" --mode mutual --segmenter clean --refiner depth_tolerance=2", "depth_tolerance must lie in [0, 1)"},
+        {" --mode mutual --segmenter clean --refiner depth_tolerance=2", "depth_tolerance: 2 is outside its range [0, 1)"},
         {" --mode plain --tracker orb.max_feature=500", "unknown field 'orb.max_feature'"}}) {
     const CommandOutput refused = Run("bench slam " + sequence.string() + arguments);
     EXPECT_EQ(refused.exit_code, 1) << arguments;

@@ -168,6 +168,36 @@ TEST_F(CliBadInputTest, HelpListsTheExitCodes) {
   }
 }
 
+// `segslam options` lists every tunable with its default, range, unit and help, as the
+// registries declare them; --json gives the same list.
+TEST_F(CliBadInputTest, OptionsListsEveryTunableWithDefaultRangeAndHelp) {
+  const fs::path listing = dir_ / "options.txt";
+  auto list = [&](const std::string& arguments) {
+    const int status = std::system((std::string(SEGSLAM_BINARY) + " options " + arguments + " >" + listing.string() +
+                                    " 2>/dev/null").c_str());
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  };
+  ASSERT_EQ(list("tracker"), 0);
+  const std::string tracker = ReadText(listing);
+  EXPECT_NE(tracker.find("orb.max_features"), std::string::npos);
+  EXPECT_NE(tracker.find(">= 4"), std::string::npos) << "min_rival_consensus's range";
+  EXPECT_NE(tracker.find("pose_optimizer.chi2_stereo"), std::string::npos);
+  ASSERT_EQ(list("refiner --json"), 0);
+  const nlohmann::json options = nlohmann::json::parse(ReadText(listing));
+  ASSERT_TRUE(options.is_array());
+  bool found = false;
+  for (const nlohmann::json& option : options) {
+    EXPECT_FALSE(option.at("help").get<std::string>().empty()) << option.dump();
+    if (option.at("name") == "depth_tolerance") {
+      found = true;
+      EXPECT_DOUBLE_EQ(option.at("default").get<double>(), 0.05);
+      EXPECT_EQ(option.at("range"), "[0, 1)");
+    }
+  }
+  EXPECT_TRUE(found);
+  EXPECT_EQ(list("segmenter"), 1);
+}
+
 // A folder given where a file is expected is named, with exit code 1 (it was an internal
 // error, exit 3, without the path).
 TEST_F(CliBadInputTest, FolderWhereAFileIsExpectedIsNamed) {
@@ -586,7 +616,7 @@ TEST_F(CliRunBadInputTest, RefinerOptionsOutsideTheLoopOrOutOfRangeAreRefused) {
   ExpectRunFails(sequence.string() + " --mode plain --refiner depth_tolerance=0.1", "--refiner applies to the mutual loop");
   ExpectRunFails(sequence.string() + " --mode mutual --refiner depth_tolerance=0.1", "--refiner applies to the mutual loop");
   ExpectRunFails(sequence.string() + " --mode mutual --segmenter fcis-like --refiner depth_tolerance=2",
-                 "depth_tolerance must lie in [0, 1)");
+                 "depth_tolerance: 2 is outside its range [0, 1)");
   ExpectRunFails(sequence.string() + " --mode mutual --segmenter fcis-like --refiner depth_tol=0.1",
                  "unknown field 'depth_tol'");
 }

@@ -181,7 +181,13 @@ TEST_F(ScenarioCliTest, TinyRunWritesTheReportAndItsExitCodeFollowsTheThresholds
   EXPECT_EQ(results["runs"][2]["seed"], 5);
   EXPECT_EQ(results["summary"]["pass1"]["mutual"]["ate_rmse_m"]["count"], 2);
   EXPECT_EQ(results["runs"][2]["evaluation"]["passes"][0]["frames"], 25);
+  // Every tunable as the runs used it, not only the bench: section's overrides.
+  EXPECT_EQ(results["options"]["tracker"]["orb.max_features"], 1000);
+  EXPECT_GT(results["options"]["tracker"].size(), 50u);
+  EXPECT_EQ(results["options"]["refiner"]["depth_tolerance"], 0.05);
   const std::string markdown = ReadText(report / "report.md");
+  EXPECT_NE(markdown.find("Effective options"), std::string::npos);
+  EXPECT_NE(markdown.find("pose\\_optimizer.rounds"), std::string::npos) << "the whole list, escaped for markdown";
   EXPECT_NE(markdown.find("per sequence and mode (as the paper's Table I)"), std::string::npos);
   EXPECT_NE(markdown.find("Relocalization in pass 2"), std::string::npos);
   EXPECT_NE(markdown.find("raw vs refined"), std::string::npos);

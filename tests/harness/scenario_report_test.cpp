@@ -191,7 +191,7 @@ TEST(ScenarioReportTest, RefinerOptionsNeedASimulatedSegmenterAndValidValues) {
   } bad[] = {
       {"{segmenter: gt, refiner: {depth_tolerance: 0.1}}", "ground-truth masks (gt) are not refined"},
       {"{refiner: {depth_tol: 0.1}}", "unknown field 'depth_tol'"},
-      {"{refiner: {depth_tolerance: 2}}", "depth_tolerance must lie in [0, 1)"},
+      {"{refiner: {depth_tolerance: 2}}", "depth_tolerance: 2 is outside its range [0, 1)"},
       {"{refiner: {trim_keeps_region_depth: yes}}", "not a number: 'yes'"},
       {"{refiner: [depth_tolerance]}", "expected a mapping"},
   };
