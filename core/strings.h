@@ -1,8 +1,10 @@
-// Small helpers over lists of strings: joining them with a separator, splitting text at a
-// character, and asking whether a list holds a value.
+// Small helpers over strings: joining them with a separator, splitting text at a
+// character, asking whether a list holds a value, and making text safe to print.
 #pragma once
 
+#include <cstddef>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace segslam {
@@ -17,5 +19,15 @@ std::vector<std::string> Split(const std::string& text, char separator);
 
 // Whether `list` holds `value`.
 bool Contains(const std::vector<std::string>& list, const std::string& value);
+
+// `message` as it may reach a terminal: printable ASCII and well-formed UTF-8 (a folder
+// named in another script) as they are, every other byte (control bytes, C1 controls,
+// broken UTF-8) as \xNN, so that no file's bytes clear the screen or move the cursor.
+// The CLI passes every message through it before printing.
+std::string TerminalSafe(std::string_view message);
+
+// `text` (read from a file or given on the command line) as a message quotes it:
+// TerminalSafe, cut after `max_chars` characters with "...".
+std::string PrintableText(std::string_view text, std::size_t max_chars = 60);
 
 }  // namespace segslam

@@ -31,26 +31,11 @@ struct BenchAliasingArgs {
   std::string json_file;
   std::string pictures_dir;
   std::string camera_file;
-  double spacing_m = AliasingOptions().sample_spacing_m;
-  double turn_deg = AliasingOptions().sample_turn_deg;
-  int every_frames = AliasingOptions().sample_every_frames;
-  int ransac_samples = AliasingOptions().ransac_samples;
-  double min_common_share = AliasingOptions().common_view.min_common_share;
-  double far_apart_m = AliasingOptions().common_view.far_apart_m;
-  int threads = 0;
-  bool background_only = false;
+  AliasingOptions options;  // the measure's options, set by the options of the same names
 };
 
 int RunBenchAliasing(const BenchAliasingArgs& args) {
-  AliasingOptions options;
-  options.sample_spacing_m = args.spacing_m;
-  options.sample_turn_deg = args.turn_deg;
-  options.sample_every_frames = args.every_frames;
-  options.ransac_samples = args.ransac_samples;
-  options.common_view.min_common_share = args.min_common_share;
-  options.common_view.far_apart_m = args.far_apart_m;
-  options.background_features_only = args.background_only;
-  options.threads = args.threads;
+  AliasingOptions options = args.options;
   options.cancel = InstallInterruptFlag();
   if (std::string problem; !options.IsValid(&problem)) throw Error("bench aliasing: " + problem);
   if (!fs::is_directory(args.dataset)) throw FileError(args.dataset, "not a folder");
@@ -103,33 +88,33 @@ void AddBenchAliasingCommand(CLI::App& bench, std::function<int()>* action) {
   command->add_option("dataset", args->dataset, "A dataset (with pass1/, pass2/) or one TUM-layout sequence with "
                                                 "groundtruth.txt")
       ->required();
-  command->add_option("--spacing", args->spacing_m, "Sample a frame every this many metres of ground-truth travel")
+  command->add_option("--spacing", args->options.sample_spacing_m, "Sample a frame every this many metres of ground-truth travel")
       ->check(NumberIn(0, 1e6, /*min_excluded=*/true))
       ->capture_default_str();
-  command->add_option("--turn", args->turn_deg, "... or every this many degrees of turn")
+  command->add_option("--turn", args->options.sample_turn_deg, "... or every this many degrees of turn")
       ->check(NumberIn(0, 360, /*min_excluded=*/true))
       ->capture_default_str();
-  command->add_option("--every", args->every_frames, "... or every this many frames (0 = never)")
+  command->add_option("--every", args->options.sample_every_frames, "... or every this many frames (0 = never)")
       ->check(WholeNumberIn(0, kMaxFrames, "0 = never"))
       ->capture_default_str();
-  command->add_option("--ransac-samples", args->ransac_samples,
+  command->add_option("--ransac-samples", args->options.ransac_samples,
                       "RANSAC PnP samples per pair (ORB-SLAM2's loop closing: 300; relocalization here: 2000)")
       ->check(WholeNumberIn(1, 1000000))
       ->capture_default_str();
-  command->add_option("--far-apart", args->far_apart_m,
+  command->add_option("--far-apart", args->options.common_view.far_apart_m,
                       "Also measure pairs whose cameras are at least this many metres apart, whatever they share far "
                       "off (0: only pairs with no common view)")
       ->check(NumberIn(0, 1e6))
       ->capture_default_str();
-  command->add_option("--min-common-share", args->min_common_share,
+  command->add_option("--min-common-share", args->options.common_view.min_common_share,
                       "Pairs with a smaller share of either frame's background points seen by the other share no "
                       "view")
       ->check(NumberIn(1e-6, 0.999999))
       ->capture_default_str();
-  command->add_flag("--background-only", args->background_only,
+  command->add_flag("--background-only", args->options.background_features_only,
                     "Match features on ground-truth background only (default: every feature; a match between two "
                     "features on the same instance, the same object at both places, is not counted)");
-  command->add_option("--threads", args->threads, "Worker threads (0 = all cores)")
+  command->add_option("--threads", args->options.threads, "Worker threads (0 = all cores)")
       ->check(WholeNumberIn(0, kMaxThreads, "0 = all cores"));
   command->add_option("--json", args->json_file, "Also write the results as JSON");
   command->add_option("--pictures", args->pictures_dir,

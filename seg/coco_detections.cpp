@@ -146,7 +146,7 @@ CocoDetections CocoDetections::Read(const fs::path& file, const TumSequence& seq
 
   std::unordered_map<std::string, size_t> frame_of_stem;
   for (size_t i = 0; i < sequence.size(); ++i) {
-    frame_of_stem[fs::path(sequence.entries()[i].rgb_file).stem().string()] = i;
+    frame_of_stem[sequence.FrameStem(i)] = i;
   }
 
   CocoDetections result;

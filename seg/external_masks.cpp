@@ -206,7 +206,7 @@ fs::path ExternalMaskSegmenter::MaskPath(size_t i) const {
     throw FileError(dir_, fmt::format("frame {} is out of range (the sequence has {} frames)", i,
                                       sequence_.size()));
   }
-  return dir_ / (fs::path(sequence_.entries()[i].rgb_file).stem().string() + ".png");
+  return dir_ / (sequence_.FrameStem(i) + ".png");
 }
 
 fs::path ExternalMaskSegmenter::TablePath(size_t i) const {

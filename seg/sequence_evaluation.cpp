@@ -112,7 +112,7 @@ SequenceSegEval EvaluateSequenceWithGroundTruthPoses(const SegEvalOptions& optio
     frame = sequence.LoadFrame(i);
     frame.index = static_cast<int>(i);
     gt_ids = sequence.LoadInstanceMask(
-        dir / "masks" / (fs::path(sequence.entries()[i].rgb_file).stem().string() + ".png"));
+        dir / "masks" / (sequence.FrameStem(i) + ".png"));
     initial = segmenter.Segment(frame);
 
     RefinerInput input;

@@ -286,7 +286,7 @@ fs::path SimulatedSegmenter::MaskPath(size_t i) const {
     throw FileError(dir_, fmt::format("frame {} is out of range (the sequence has {} frames)", i,
                                       sequence_.size()));
   }
-  return dir_ / "masks" / (fs::path(sequence_.entries()[i].rgb_file).stem().string() + ".png");
+  return dir_ / "masks" / (sequence_.FrameStem(i) + ".png");
 }
 
 SimulatedFrame SimulatedSegmenter::SegmentWithTruth(const RgbdFrame& frame) {

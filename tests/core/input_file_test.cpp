@@ -46,6 +46,11 @@ TEST(PrintableTextTest, EscapesBytesATerminalWouldInterpret) {
   EXPECT_EQ(PrintableText(std::string("\x1b[31mred\x01\xff", 10)), "\\x1b[31mred\\x01\\xff");
   EXPECT_EQ(PrintableText(std::string("a\0b\n", 4)), "a\\x00b\\x0a");
   EXPECT_EQ(PrintableText(std::string(100, 'x'), 5), "xxxxx...");
+  // Well-formed UTF-8 is printable (a folder named in another script) and counts as one
+  // character each; the cut never splits one.
+  EXPECT_EQ(PrintableText("naïve café"), "naïve café");
+  EXPECT_EQ(PrintableText("naïve", 3), "naï...");
+  EXPECT_EQ(PrintableText(std::string("\xc3", 1), 5), "\\xc3") << "a lone lead byte is escaped";
 }
 
 // Binary bytes in a file's field come back escaped, not raw.
