@@ -13,9 +13,11 @@
 
 #include "core/error.h"
 #include "core/image_io.h"
+#include "core/instances.h"
 #include "core/input_file.h"
 #include "core/json_file.h"
 #include "core/pose.h"
+#include "core/strings.h"
 #include "core/tracks.h"
 #include "core/tum_dataset.h"
 #include "harness/dataset_run.h"
@@ -214,8 +216,29 @@ std::map<int, int> DominantGroundTruthIds(const cv::Mat& run_ids, const cv::Mat&
 }
 
 // MovingDetectionScores (see the header for how instances relate to the ground truth).
+// The band of MovingDistanceBands() that a distance in metres falls in.
+const std::string& DistanceBand(double distance_m) {
+  const std::vector<std::string>& bands = MovingDistanceBands();
+  return distance_m < 10 ? bands[0] : distance_m < 20 ? bands[1] : distance_m < 40 ? bands[2] : bands[3];
+}
+
+// The class of MovingClasses() of a ground-truth instance: its category, or "other".
+std::string MovingClass(const InstanceTable& table, int gt_id) {
+  const InstanceInfo* info = table.Find(static_cast<std::uint16_t>(gt_id));
+  if (info != nullptr && Contains(MovingClasses(), info->category_name)) return info->category_name;
+  return "other";
+}
+
+void CountJudgement(bool judged_moving, bool truly_moving, MovingDetectionCounts* counts) {
+  if (judged_moving) {
+    ++(truly_moving ? counts->true_positives : counts->false_positives);
+  } else {
+    ++(truly_moving ? counts->false_negatives : counts->true_negatives);
+  }
+}
+
 void ScoreMovingDetection(const std::vector<LoggedFrame>& frames, const fs::path& run_dir, const fs::path& sequence_dir,
-                          PassEvaluation* pass) {
+                          const std::vector<StampedPose>& ground_truth, PassEvaluation* pass) {
   const fs::path tracks_file = sequence_dir / "tracks.json";
   if (!fs::exists(tracks_file)) {
     pass->moving_missing_reason = "no tracks.json in " + sequence_dir.string();
@@ -229,11 +252,38 @@ void ScoreMovingDetection(const std::vector<LoggedFrame>& frames, const fs::path
                                   "saved no masks to relate them";
     return;
   }
-  std::map<std::pair<int, int>, bool> truly_moving;  // (instance id, frame) -> moving
+  struct TruthSample {
+    bool moving = false;
+    Eigen::Vector3d position_w = Eigen::Vector3d::Zero();
+  };
+  std::map<std::pair<int, int>, TruthSample> truth;  // (instance id, frame) -> sample
   for (const ObjectTrack& track : ReadTracks(tracks_file)) {
-    for (const TrackSample& sample : track.samples) truly_moving[{track.instance_id, sample.frame}] = sample.moving;
+    for (const TrackSample& sample : track.samples) {
+      truth[{track.instance_id, sample.frame}] = {sample.moving, sample.T_world_object.translation()};
+    }
   }
+  InstanceTable table;
+  if (fs::exists(sequence_dir / "instances.json")) table = InstanceTable::Read(sequence_dir / "instances.json");
+  std::map<double, Eigen::Vector3d> camera_at;  // ground-truth stamp -> camera position
+  for (const StampedPose& pose : ground_truth) camera_at[pose.stamp_s] = pose.T_wc.translation();
+  // The band of a ground-truth instance in a frame; empty without its pose or the camera's.
+  const auto band_of = [&](int gt_id, const LoggedFrame& frame) -> std::string {
+    const auto sample = truth.find({gt_id, frame.index});
+    const auto camera = camera_at.lower_bound(frame.stamp_s - 1e-3);
+    if (sample == truth.end() || camera == camera_at.end() || camera->first > frame.stamp_s + 1e-3) return "";
+    return DistanceBand((sample->second.position_w - camera->second).norm());
+  };
   MovingDetectionScores scores;
+  for (const std::string& band : MovingDistanceBands()) scores.by_distance[band] = {};
+  for (const std::string& name : MovingClasses()) scores.by_class[name] = {};
+  // Adds to the whole, and to the band and class of a ground-truth instance (not background).
+  const auto count = [&](int gt_id, const LoggedFrame& frame, const auto& add) {
+    add(&scores);
+    if (gt_id == 0) return;
+    const std::string band = band_of(gt_id, frame);
+    if (!band.empty()) add(&scores.by_distance[band]);
+    add(&scores.by_class[MovingClass(table, gt_id)]);
+  };
   // Only a mutual or oracle run lists every instance it saw; the other modes list none.
   const bool lists_instances = pass->mode == "mutual" || pass->mode == "oracle";
   std::vector<double> moving_feature_shares;
@@ -265,22 +315,21 @@ void ScoreMovingDetection(const std::vector<LoggedFrame>& frames, const fs::path
         const auto found = gt_id_of.find(instance.id);
         gt_id = found == gt_id_of.end() ? 0 : found->second;
       }
-      const auto found = truly_moving.find({gt_id, frame.index});
-      const bool moving = found != truly_moving.end() && found->second;
+      const auto found = truth.find({gt_id, frame.index});
+      const bool moving = found != truth.end() && found->second.moving;
       if (moving) {
         seen_moving[gt_id] = seen_moving[gt_id] || (instance.judged && instance.moving);
         moving_features += instance.features;
       }
       if (!instance.judged) continue;
-      if (instance.moving) {
-        ++(moving ? scores.true_positives : scores.false_positives);
-      } else {
-        ++(moving ? scores.false_negatives : scores.true_negatives);
-      }
+      count(gt_id, frame, [&](MovingDetectionCounts* c) { CountJudgement(instance.moving, moving, c); });
     }
-    scores.moving_seen += static_cast<int>(seen_moving.size());
-    scores.moving_seen_detected +=
-        static_cast<int>(std::count_if(seen_moving.begin(), seen_moving.end(), [](const auto& e) { return e.second; }));
+    for (const auto& [gt_id, detected] : seen_moving) {
+      count(gt_id, frame, [&, detected = detected](MovingDetectionCounts* c) {
+        ++c->moving_seen;
+        c->moving_seen_detected += detected;
+      });
+    }
     add_share(frame, moving_features);
   }
   if (!moving_feature_shares.empty()) scores.moving_feature_share = ComputeErrorStatistics(moving_feature_shares);
@@ -404,7 +453,7 @@ PassEvaluation EvaluatePass(const std::string& name, const fs::path& run_dir, co
   ReadLoopSegmentationScores(run_dir / "seg.json", &pass);
 
   // Moving-object detection over judged instances (MovingDetectionScores).
-  ScoreMovingDetection(frames, run_dir, sequence_dir, &pass);
+  ScoreMovingDetection(frames, run_dir, sequence_dir, ground_truth, &pass);
   return pass;
 }
 
@@ -462,17 +511,17 @@ std::string MapRelativeTable(const std::vector<PassEvaluation>& passes, size_t n
 
 }  // namespace
 
-double MovingDetectionScores::Precision() const {
+double MovingDetectionCounts::Precision() const {
   const int predicted = true_positives + false_positives;
   return predicted > 0 ? double(true_positives) / predicted : kNaN;
 }
 
-double MovingDetectionScores::Recall() const {
+double MovingDetectionCounts::Recall() const {
   const int actual = true_positives + false_negatives;
   return actual > 0 ? double(true_positives) / actual : kNaN;
 }
 
-double MovingDetectionScores::Coverage() const {
+double MovingDetectionCounts::Coverage() const {
   return moving_seen > 0 ? double(moving_seen_detected) / moving_seen : kNaN;
 }
 
@@ -523,6 +572,19 @@ nlohmann::json PassEvaluation::ToJson() const {
                                 {"moving_seen_detected", moving->moving_seen_detected},
                                 {"coverage", NumberJson(moving->Coverage())},
                                 {"moving_feature_share", StatisticsJson(moving->moving_feature_share)}};
+    const auto counts_json = [](const MovingDetectionCounts& c) {
+      return nlohmann::json{{"judged", c.Judged()},
+                            {"true_positives", c.true_positives},
+                            {"false_positives", c.false_positives},
+                            {"false_negatives", c.false_negatives},
+                            {"true_negatives", c.true_negatives},
+                            {"precision", NumberJson(c.Precision())},
+                            {"moving_seen", c.moving_seen},
+                            {"moving_seen_detected", c.moving_seen_detected},
+                            {"coverage", NumberJson(c.Coverage())}};
+    };
+    for (const auto& [band, counts] : moving->by_distance) json["moving_detection"]["by_distance"][band] = counts_json(counts);
+    for (const auto& [name, counts] : moving->by_class) json["moving_detection"]["by_class"][name] = counts_json(counts);
   }
   for (const auto& [metric, value] : PassMetrics(*this)) json["metrics"][metric] = NumberJson(value);
   return json;
@@ -595,6 +657,18 @@ std::string RunEvaluation::Table() const {
                           Percent(m.Precision()), Percent(m.Recall()), m.true_positives, m.false_positives,
                           m.false_negatives, m.true_negatives, Percent(m.Coverage()), share);
     }
+    text += "\nWhere it misses: coverage (of movers seen) / precision (of instances judged moving), percent\n";
+    for (const PassEvaluation& p : passes) {
+      if (!p.moving.has_value()) continue;
+      for (const auto* groups : {&p.moving->by_distance, &p.moving->by_class}) {
+        std::vector<std::string> cells;
+        for (const auto& [group, c] : *groups) {
+          cells.push_back(fmt::format("{} {} of {} / {}", group, Percent(c.Coverage()), c.moving_seen,
+                                      Percent(c.Precision())));
+        }
+        text += fmt::format("{:<{}} {}\n", p.name, name_width, Join(cells, ";  "));
+      }
+    }
   }
   return text;
 }
@@ -635,7 +709,17 @@ const std::vector<std::string>& PassMetricNames() {
       "seg_raw_map",        "seg_raw_ap50",       "seg_raw_miou",       "seg_refined_map",
       "seg_refined_ap50",   "seg_refined_miou",   "moving_precision",   "moving_recall",
       "moving_coverage",    "moving_feature_share_mean",                "moving_feature_share_max"};
-  return names;
+  static const std::vector<std::string> with_breakdown = [] {
+    std::vector<std::string> all = names;
+    for (const auto* groups : {&MovingDistanceBands(), &MovingClasses()}) {
+      for (const std::string& group : *groups) {
+        all.push_back("moving_precision_" + group);
+        all.push_back("moving_coverage_" + group);
+      }
+    }
+    return all;
+  }();
+  return with_breakdown;
 }
 
 std::map<std::string, double> PassMetrics(const PassEvaluation& pass) {
@@ -671,6 +755,12 @@ std::map<std::string, double> PassMetrics(const PassEvaluation& pass) {
     metrics["moving_precision"] = pass.moving->Precision();
     metrics["moving_recall"] = pass.moving->Recall();
     metrics["moving_coverage"] = pass.moving->Coverage();
+    for (const auto* groups : {&pass.moving->by_distance, &pass.moving->by_class}) {
+      for (const auto& [group, counts] : *groups) {
+        metrics["moving_precision_" + group] = counts.Precision();
+        metrics["moving_coverage_" + group] = counts.Coverage();
+      }
+    }
     if (pass.moving->moving_feature_share.has_value()) {
       metrics["moving_feature_share_mean"] = pass.moving->moving_feature_share->mean;
       metrics["moving_feature_share_max"] = pass.moving->moving_feature_share->max;

@@ -52,7 +52,7 @@ namespace segslam::harness {
 // recall: they are neither detections nor misses there. Coverage counts them: of the
 // (frame, truly moving ground-truth instance) pairs SLAM saw (at least one feature on
 // the instance, judged or not), the share where it judged the instance moving.
-struct MovingDetectionScores {
+struct MovingDetectionCounts {
   int true_positives = 0;   // judged moving, truly moving
   int false_positives = 0;  // judged moving, truly static
   int false_negatives = 0;  // judged static, truly moving
@@ -63,6 +63,23 @@ struct MovingDetectionScores {
   int moving_seen = 0;           // (frame, truly moving instance) pairs with a feature on it
   int moving_seen_detected = 0;  // of those, judged moving
   double Coverage() const;       // moving_seen_detected / moving_seen; NaN when none was seen
+};
+
+// Where the judgement misses: the counts above per band of distance from the camera to
+// the object (its tracks.json pose against the frame's ground-truth camera position) and
+// per class (instances.json's category), so a user sees which objects it misses.
+inline const std::vector<std::string>& MovingDistanceBands() {
+  static const std::vector<std::string> bands = {"0_10m", "10_20m", "20_40m", "40m_plus"};
+  return bands;
+}
+inline const std::vector<std::string>& MovingClasses() {
+  static const std::vector<std::string> classes = {"person", "car", "truck", "bus", "other"};
+  return classes;
+}
+
+struct MovingDetectionScores : MovingDetectionCounts {
+  std::map<std::string, MovingDetectionCounts> by_distance;  // MovingDistanceBands()
+  std::map<std::string, MovingDetectionCounts> by_class;     // MovingClasses()
   // How much of what SLAM saw moved: per frame, the share of the frame's features that lie
   // on truly moving instances (of the masks SLAM used, related to the ground truth as
   // above; exact with the dataset's masks), over every frame with features. Only mutual

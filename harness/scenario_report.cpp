@@ -190,6 +190,37 @@ Table MovingDetectionTable(const ScenarioReport& report) {
   return moving;
 }
 
+// Where the judgement misses (mutual only): coverage and precision by distance band and
+// by class, per pass.
+Table MovingBreakdownTable(const ScenarioReport& report) {
+  Table table{"Moving-object detection of mutual by distance and class [%]",
+              std::string(kSpreadNote) +
+                  " Coverage and precision as above, of the (frame, instance) pairs whose ground-truth object "
+                  "lies in that band of distance from the camera (its tracks.json pose) or is of that class; n/a: "
+                  "none seen moving (coverage) or none judged moving (precision).",
+              {"objects"},
+              {}};
+  if (std::find(report.bench.modes.begin(), report.bench.modes.end(), "mutual") == report.bench.modes.end()) {
+    return table;
+  }
+  for (const auto& pass : kScenarioPasses) {
+    table.header.push_back(std::string(pass) + " coverage");
+    table.header.push_back(std::string(pass) + " precision");
+  }
+  const auto add_row = [&](const std::string& label, const std::string& group) {
+    std::vector<std::string> row = {label};
+    for (const auto& pass : kScenarioPasses) {
+      row.push_back(Cell(report.spreads, pass, "mutual", "moving_coverage_" + group, 1, 100));
+      row.push_back(Cell(report.spreads, pass, "mutual", "moving_precision_" + group, 1, 100));
+    }
+    table.rows.push_back(row);
+  };
+  const std::vector<std::string> band_labels = {"0 to 10 m", "10 to 20 m", "20 to 40 m", "40 m and more"};
+  for (std::size_t b = 0; b < MovingDistanceBands().size(); ++b) add_row(band_labels[b], MovingDistanceBands()[b]);
+  for (const std::string& name : MovingClasses()) add_row(name, name);
+  return table;
+}
+
 Table RunsTable(const ScenarioReport& report) {
   Table runs{"Every run", "Seeds are the simulated segmenter's; a deterministic mode ran once.",
              {"mode", "repeat", "seed", "pass1 ATE rmse [m]", "pass1 localized [%]", "pass2 ATE rmse [m]",
@@ -223,6 +254,7 @@ std::vector<Table> ReportTables(const ScenarioReport& report) {
   tables.push_back(SegmentationTable(report));
   tables.push_back(RelocalizationTable(report));
   if (Table moving = MovingDetectionTable(report); !moving.rows.empty()) tables.push_back(std::move(moving));
+  if (Table breakdown = MovingBreakdownTable(report); !breakdown.rows.empty()) tables.push_back(std::move(breakdown));
   tables.push_back(RunsTable(report));
   return tables;
 }

@@ -11,10 +11,12 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "core/error.h"
 #include "core/image_io.h"
+#include "core/instances.h"
 #include "core/pose.h"
 #include "core/tracks.h"
 
@@ -298,6 +300,64 @@ TEST_F(RunEvaluationTest, MovingDetectionCountsJudgedInstancesAgainstTracks) {
   EXPECT_EQ(scores.moving_seen_detected, 1);
   EXPECT_DOUBLE_EQ(scores.Coverage(), 1.0 / 3.0);
   EXPECT_TRUE(std::isnan(MovingDetectionScores{}.Coverage()));
+}
+
+// Where the judgement misses: the same counts by distance from the camera (the object's
+// tracks.json position against the frame's ground-truth camera) and by class.
+TEST_F(RunEvaluationTest, MovingDetectionBreaksDownByDistanceAndClass) {
+  const fs::path sequence = dir_ / "sequence";
+  WriteSequence(sequence, GroundTruth(0));  // frame 0's camera at (0, 0, 1.5)
+  InstanceTable table;
+  std::vector<ObjectTrack> tracks;
+  // id, category, distance ahead of frame 0's camera, truly moving.
+  for (const auto& [id, category, distance_m, moving] :
+       std::vector<std::tuple<int, int, double, bool>>{{3, 1, 5, true}, {4, 3, 15, false}, {5, 8, 30, true}, {6, 6, 50, true}}) {
+    table.Add({static_cast<std::uint16_t>(id), category, "", false});
+    ObjectTrack track;
+    track.instance_id = static_cast<std::uint16_t>(id);
+    TrackSample sample;
+    sample.stamp_s = 100;
+    sample.moving = moving;
+    sample.T_world_object.translation() = Eigen::Vector3d(distance_m, 0, 1.5);
+    track.samples.push_back(sample);
+    tracks.push_back(track);
+  }
+  WriteTracks(sequence / "tracks.json", tracks);
+  std::ofstream(sequence / "instances.json") << table.ToJson().dump();
+  const std::string judgements =
+      "{\"id\": 3, \"judged\": true, \"moving\": true},"    // person at 5 m: true positive
+      "{\"id\": 4, \"judged\": true, \"moving\": true},"    // car at 15 m: false positive
+      "{\"id\": 5, \"judged\": true, \"moving\": false},"   // truck at 30 m: false negative
+      "{\"id\": 6, \"judged\": false, \"moving\": false},"  // bus at 50 m: seen, missed
+      "{\"id\": 7, \"judged\": true, \"moving\": false}";   // no track: other, no distance
+  WriteRun(dir_ / "run", GroundTruth(0), judgements);
+
+  const RunEvaluation evaluation = EvaluateRun(dir_ / "run", sequence);
+  ASSERT_TRUE(evaluation.passes[0].moving.has_value());
+  const MovingDetectionScores& scores = *evaluation.passes[0].moving;
+  const auto& near = scores.by_distance.at("0_10m");
+  EXPECT_EQ(near.true_positives, 1);
+  EXPECT_DOUBLE_EQ(near.Coverage(), 1.0);
+  EXPECT_EQ(scores.by_distance.at("10_20m").false_positives, 1);
+  EXPECT_DOUBLE_EQ(scores.by_distance.at("10_20m").Precision(), 0.0);
+  EXPECT_EQ(scores.by_distance.at("20_40m").false_negatives, 1);
+  EXPECT_DOUBLE_EQ(scores.by_distance.at("20_40m").Coverage(), 0.0);
+  EXPECT_EQ(scores.by_distance.at("40m_plus").Judged(), 0);
+  EXPECT_EQ(scores.by_distance.at("40m_plus").moving_seen, 1);
+  EXPECT_EQ(scores.by_class.at("person").true_positives, 1);
+  EXPECT_EQ(scores.by_class.at("car").false_positives, 1);
+  EXPECT_EQ(scores.by_class.at("truck").false_negatives, 1);
+  EXPECT_EQ(scores.by_class.at("bus").moving_seen, 1);
+  EXPECT_EQ(scores.by_class.at("other").true_negatives, 1);
+  int banded = 0;
+  for (const auto& [band, counts] : scores.by_distance) banded += counts.Judged();
+  EXPECT_EQ(banded, 3) << "the instance without a track has no distance";
+  const std::map<std::string, double> metrics = PassMetrics(evaluation.passes[0]);
+  EXPECT_DOUBLE_EQ(metrics.at("moving_coverage_0_10m"), 1.0);
+  EXPECT_DOUBLE_EQ(metrics.at("moving_precision_car"), 0.0);
+  EXPECT_TRUE(std::isnan(metrics.at("moving_coverage_car")));
+  const nlohmann::json json = evaluation.passes[0].ToJson();
+  EXPECT_EQ(json["moving_detection"]["by_class"]["truck"]["false_negatives"], 1);
 }
 
 // The share of a frame's features on truly moving instances, per frame: instances count
