@@ -10,6 +10,16 @@
 namespace segslam::slam {
 namespace {
 
+// SetTrackerOption's error, or "no error".
+std::string SetMessage(TrackerOptions* options, const std::string& assignment) {
+  try {
+    SetTrackerOption(options, assignment);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
 TEST(TrackerOptionOverridesTest, SetsRealIntegerBooleanAndNestedFields) {
   TrackerOptions options;
   SetTrackerOption(&options, "last_frame_radius_px=15");
@@ -30,14 +40,7 @@ TEST(TrackerOptionOverridesTest, SetsRealIntegerBooleanAndNestedFields) {
 
 TEST(TrackerOptionOverridesTest, RejectsUnknownNamesAndMalformedValuesNamingTheField) {
   TrackerOptions options;
-  auto message = [&](const std::string& assignment) {
-    try {
-      SetTrackerOption(&options, assignment);
-    } catch (const Error& e) {
-      return std::string(e.what());
-    }
-    return std::string("no error");
-  };
+  auto message = [&](const std::string& assignment) { return SetMessage(&options, assignment); };
   EXPECT_NE(message("last_frame_radius=15").find("unknown field 'last_frame_radius'"), std::string::npos);
   EXPECT_NE(message("last_frame_radius_px=fifteen").find("last_frame_radius_px: not a number"), std::string::npos);
   EXPECT_NE(message("min_tracking_inliers=30.5").find("min_tracking_inliers: not a whole number"), std::string::npos);
@@ -58,14 +61,7 @@ TEST(TrackerOptionOverridesTest, NamesAreSortedAndIncludeNestedFields) {
 // the tracker refuses a struct that holds one.
 TEST(TrackerOptionOverridesTest, RangesAreCheckedWhenSetAndWhenATrackerIsMade) {
   TrackerOptions options;
-  auto message = [&](const std::string& assignment) {
-    try {
-      SetTrackerOption(&options, assignment);
-    } catch (const Error& e) {
-      return std::string(e.what());
-    }
-    return std::string("no error");
-  };
+  auto message = [&](const std::string& assignment) { return SetMessage(&options, assignment); };
   EXPECT_NE(message("min_rival_consensus=3").find("min_rival_consensus: 3 is outside its range >= 4"), std::string::npos);
   EXPECT_NE(message("depth_sigma_at_1m=0").find("depth_sigma_at_1m: 0 is outside its range > 0 m"), std::string::npos);
   EXPECT_NE(message("projection_ratio=1.5").find("projection_ratio: 1.5 is outside its range (0, 1]"), std::string::npos);
