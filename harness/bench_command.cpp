@@ -231,7 +231,7 @@ void AddBenchCommand(CLI::App& app, std::function<int()>* action) {
   slam->add_option("sequence", slam_args->sequence,
                    "A TUM-layout sequence (with masks/ for mutual and mask-moveable, unless --masks names a folder)")
       ->required();
-  slam->add_option("--mode", slam_args->words.mode, "plain, mask-moveable, mutual or oracle")
+  slam->add_option("--mode", slam_args->words.mode, "plain, mask-moveable, mutual, mutual-sparse or oracle")
       ->check(CLI::IsMember(mutual::SlamModeNames()))
       ->capture_default_str();
   slam->add_option("--frames", slam_args->run.frames, "Only the first N frames (0 = all)")

@@ -59,9 +59,11 @@ BenchSettings BenchSettings::FromYaml(const YAML::Node& bench, const std::string
         AppendOptionAssignments(value, "", origin + ": bench.refiner", &settings.refiner);
       } else if (key == "tracker") {
         AppendOptionAssignments(value, "", origin + ": bench.tracker", &settings.tracker);
+      } else if (key == "static_twin") {
+        settings.static_twin = value.as<bool>();
       } else {
         throw Error(origin + ": unknown key 'bench." + key +
-                    "' (known: modes, repeats, segmenter, segmenter_strength, seed, refiner, tracker)");
+                    "' (known: modes, repeats, segmenter, segmenter_strength, seed, refiner, tracker, static_twin)");
       }
     } catch (const YAML::Exception& e) {
       throw Error(origin + ": bench." + key + ": " + e.msg);
@@ -73,10 +75,12 @@ BenchSettings BenchSettings::FromYaml(const YAML::Node& bench, const std::string
 }
 
 std::string BenchSettings::Check() const {
-  if (modes.empty()) return "modes: at least one of plain, mask-moveable, mutual, oracle";
+  if (modes.empty()) return "modes: at least one of plain, mask-moveable, mutual, mutual-sparse, oracle";
   std::set<std::string> seen;
   for (const std::string& mode : modes) {
-    if (!Contains(mutual::SlamModeNames(), mode)) return "modes: unknown mode '" + mode + "' (plain, mask-moveable, mutual or oracle)";
+    if (!Contains(mutual::SlamModeNames(), mode)) {
+      return "modes: unknown mode '" + mode + "' (plain, mask-moveable, mutual, mutual-sparse or oracle)";
+    }
     if (!seen.insert(mode).second) return "modes: '" + mode + "' twice";
   }
   if (repeats < 1) return fmt::format("repeats: must be >= 1 (got {})", repeats);

@@ -36,6 +36,10 @@ struct BenchSettings {
   // mode, from `tracker: {name: value, ...}`; nested names as orb: {max_features: 1500}
   // or orb.max_features. A sweep axis as bench.tracker.NAME.
   std::vector<std::string> tracker;
+  // Also run plain on the scenario's static twin (scenes::StaticTwin: the same world with
+  // nothing moving), the yardstick of how much error the traffic adds: results and
+  // `expect:` get MODE.traffic_error_removed (harness/scenario_expectations.h).
+  bool static_twin = false;
 
   // Throws segslam::Error naming `origin` and the key on unknown keys or bad values.
   static BenchSettings FromYaml(const YAML::Node& bench, const std::string& origin);

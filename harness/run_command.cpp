@@ -147,11 +147,11 @@ void AddRunCommand(CLI::App& app, std::function<int()>* action) {
       ->required();
   // Checked by MakeRunConfig, whose error is one line like every other.
   cmd->add_option("--mode", args->words.mode,
-                  "plain, mask-moveable, mutual, or oracle (mutual with the true moving/static verdicts of a "
-                  "generated dataset, for reference)");
+                  "plain, mask-moveable, mutual, mutual-sparse (mutual judging from sparse features, as the "
+                  "paper) or oracle (mutual with the true moving/static verdicts of a generated dataset)");
   cmd->add_option("--masks", args->words.masks,
                   "'gt' (the dataset's masks, used as they are) or a folder of external masks (refined in "
-                  "the loop in mutual mode)");
+                  "the loop in the mutual modes)");
   cmd->add_option("--segmenter", args->words.segmenter,
                   "Simulated segmenter preset on the dataset's ground-truth masks (mutual: refined in the loop; "
                   "mask-moveable: raw)")

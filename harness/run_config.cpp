@@ -19,7 +19,7 @@ std::string MaskSource::Describe() const {
 }
 
 bool RunConfig::RefinesMasks() const {
-  return mode == mutual::SlamMode::kMutual &&
+  return mutual::IsMutualLoop(mode) &&
          (masks.kind == MaskSource::Kind::kExternal || masks.kind == MaskSource::Kind::kSimulated);
 }
 

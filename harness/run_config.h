@@ -34,8 +34,8 @@ struct RunConfig {
   mutual::SlamMode mode = mutual::SlamMode::kMutual;
   MaskSource masks;
 
-  // The paper's loop refines the masks: mutual mode with a segmenter's masks (simulated
-  // or external). The ground truth's have nothing to repair.
+  // The paper's loop refines the masks: mutual or mutual-sparse mode with a segmenter's
+  // masks (simulated or external). The ground truth's have nothing to repair.
   bool RefinesMasks() const;
   // No seed matters: plain, the oracle, or ground-truth masks.
   bool IsDeterministic() const;

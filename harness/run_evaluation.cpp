@@ -284,8 +284,8 @@ void ScoreMovingDetection(const std::vector<LoggedFrame>& frames, const fs::path
     if (!band.empty()) add(&scores.by_distance[band]);
     add(&scores.by_class[MovingClass(table, gt_id)]);
   };
-  // Only a mutual or oracle run lists every instance it saw; the other modes list none.
-  const bool lists_instances = pass->mode == "mutual" || pass->mode == "oracle";
+  // Only a run of a judging mode lists every instance it saw; the other modes list none.
+  const bool lists_instances = pass->mode == "mutual" || pass->mode == "mutual-sparse" || pass->mode == "oracle";
   std::vector<double> moving_feature_shares;
   const auto add_share = [&](const LoggedFrame& frame, int moving_features) {
     if (lists_instances && frame.features > 0) {

@@ -263,7 +263,8 @@ std::vector<Expectation> CheckableExpectations(std::vector<Expectation> expectat
     return mode.empty() || std::find(bench.modes.begin(), bench.modes.end(), mode) != bench.modes.end();
   };
   for (auto it = expectations.begin(); it != expectations.end();) {
-    if (mode_runs(it->name.mode) && mode_runs(it->name.denominator_mode)) {
+    const bool against_plain = it->name.metric == kTrafficErrorRemoved;
+    if (mode_runs(it->name.mode) && mode_runs(it->name.denominator_mode) && (!against_plain || mode_runs("plain"))) {
       ++it;
     } else {
       skipped->push_back(it->name.text);
@@ -407,6 +408,12 @@ ScenarioReport RunScenarioToReport(const ScenarioRunRequest& args) {
   std::vector<Expectation> expectations = ParseExpectations(
       scenario.expect, BenchSettings::FromYaml(scenario.bench, args.scenario_file).modes, args.scenario_file);
   const BenchSettings bench = EffectiveBench(scenario, args);
+  for (const Expectation& expectation : expectations) {
+    if (expectation.name.metric == kTrafficErrorRemoved && !bench.static_twin) {
+      throw Error(args.scenario_file + ": expect: " + expectation.name.text +
+                  " needs the static twin (bench: {static_twin: true}, or --set bench.static_twin=true)");
+    }
+  }
   std::vector<std::string> skipped;
   expectations = CheckableExpectations(std::move(expectations), bench, &skipped);
   const sim::GlBackend backend = sim::ParseGlBackend(args.gl);
@@ -442,6 +449,22 @@ ScenarioReport RunScenarioToReport(const ScenarioRunRequest& args) {
   report.runs = std::move(runs);
   // A Ctrl-C after the last frame stops here, not after minutes of figures with exit 0.
   if (cancel->load()) throw Error("scenario run: interrupted; no report written to " + report_dir.string());
+  if (bench.static_twin) {
+    // Plain on the same world with nothing moving: how much error the traffic adds.
+    const scenes::Scenario twin = scenes::StaticTwin(scenario);
+    const fs::path twin_dataset =
+        fs::path(args.cache_dir) / (twin.name + "-" + DatasetCacheKey(twin, args.frames, backend));
+    fmt::print("static twin: {} (no moving cars, pedestrians or walkers)\n", twin.name);
+    EnsureDataset(twin, twin_dataset, args, backend, cancel);
+    BenchSettings twin_bench = bench;
+    twin_bench.modes = {"plain"};
+    twin_bench.repeats = 1;  // plain is deterministic
+    report.static_twin_runs = PlanRuns(twin_bench);
+    for (RepeatRun& run : report.static_twin_runs) run.run_dir = (fs::path("runs") / kStaticTwinPlain / "once").string();
+    RepeatRunner(&report.static_twin_runs, twin_bench, twin_dataset, report_dir, args, cancel).RunAll();
+    if (cancel->load()) throw Error("scenario run: interrupted; no report written to " + report_dir.string());
+    report.static_twin_dataset_dir = twin_dataset.string();
+  }
 
   report.scenario_name = scenario.name;
   report.scenario_file = args.scenario_file;
@@ -452,6 +475,9 @@ ScenarioReport RunScenarioToReport(const ScenarioRunRequest& args) {
   report.frames_per_pass = args.frames;
   report.bench = bench;
   report.spreads = Summarize(report.runs);
+  for (const auto& [pass, modes] : Summarize(report.static_twin_runs)) {
+    for (const auto& [mode, metrics] : modes) report.spreads[pass][kStaticTwinPlain] = metrics;
+  }
   report.checks = CheckExpectations(expectations, report.spreads);
   report.not_checked = skipped;
   report.report_dir = report_dir;

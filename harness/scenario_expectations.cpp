@@ -52,6 +52,11 @@ MetricName ParseMetricName(const std::string& text, const std::vector<std::strin
     name.mode = subject;
   }
   if (!Contains(modes, name.mode)) throw unknown("mode '" + name.mode + "' does not run");
+  if (metric == kTrafficErrorRemoved && !name.IsRatio()) {
+    if (!Contains(modes, std::string("plain"))) throw unknown(metric + " is measured against plain, which does not run");
+    name.metric = metric;
+    return name;
+  }
   if (!Contains(PassMetricNames(), metric)) {
     throw unknown("'" + metric + "' is not one of " + Join(PassMetricNames(), ", "));
   }
@@ -140,19 +145,38 @@ const Spread* FindSpread(const SpreadTable& table, const std::string& pass, cons
   return v == m->second.end() ? nullptr : &v->second;
 }
 
+namespace {
+
+// The median of `metric` over `mode`'s runs; NaN when a run lacks the value (no ATE after
+// a pass that lost its map, say): the median of the others would hide it.
+double CompleteMedian(const SpreadTable& table, const std::string& pass, const std::string& mode,
+                      const std::string& metric) {
+  const Spread* s = FindSpread(table, pass, mode, metric);
+  return s == nullptr || s->count < s->runs ? kNaN : s->median;
+}
+
+}  // namespace
+
+double TrafficErrorRemoved(const SpreadTable& table, const std::string& pass, const std::string& mode) {
+  const double plain = CompleteMedian(table, pass, "plain", "ate_rmse_m");
+  const double twin = CompleteMedian(table, pass, kStaticTwinPlain, "ate_rmse_m");
+  const double with_mode = CompleteMedian(table, pass, mode, "ate_rmse_m");
+  const double added = plain - twin;
+  return added > 0 ? (plain - with_mode) / added : kNaN;
+}
+
 std::vector<ExpectationResult> CheckExpectations(const std::vector<Expectation>& expectations, const SpreadTable& table) {
   std::vector<ExpectationResult> results;
   for (const Expectation& expectation : expectations) {
     const MetricName& name = expectation.name;
-    // A run without the value (no ATE after a pass that lost its map, say) fails the
-    // check: the median of the others would hide it.
-    auto median = [&](const std::string& mode) {
-      const Spread* s = FindSpread(table, name.pass, mode, name.metric);
-      return s == nullptr || s->count < s->runs ? kNaN : s->median;
-    };
+    auto median = [&](const std::string& mode) { return CompleteMedian(table, name.pass, mode, name.metric); };
     ExpectationResult result;
     result.expectation = expectation;
-    result.value = name.IsRatio() ? median(name.mode) / median(name.denominator_mode) : median(name.mode);
+    if (name.metric == kTrafficErrorRemoved) {
+      result.value = TrafficErrorRemoved(table, name.pass, name.mode);
+    } else {
+      result.value = name.IsRatio() ? median(name.mode) / median(name.denominator_mode) : median(name.mode);
+    }
     result.passed = std::isfinite(result.value) && (!expectation.min || result.value >= *expectation.min) &&
                     (!expectation.max || result.value <= *expectation.max);
     results.push_back(result);

@@ -10,6 +10,9 @@
 // (harness/run_evaluation.h: ate_rmse_m, localized_share, seg_refined_map, ...); RATIO is
 // METRIC + "_ratio", or ate_ratio for ate_rmse_m_ratio (the paper's headline figure).
 // Examples: mutual.ate_rmse_m, pass2.mutual.localized_share, mutual_vs_plain.ate_ratio.
+//   [PASS.]MODE.traffic_error_removed   with the static twin (bench: {static_twin: true}):
+//                                       the share of the traffic's added error MODE
+//                                       removes, TrafficErrorRemoved().
 // A threshold is {min: X}, {max: X} or both; a value that is NaN (the metric does not
 // exist for that mode, e.g. seg_refined_map of plain) fails.
 #pragma once
@@ -28,6 +31,11 @@ namespace segslam::harness {
 
 // The passes of a scenario's dataset, as metric names, results.json and reports name them.
 inline const std::vector<std::string> kScenarioPasses = {"pass1", "pass2"};
+
+// Plain on the scenario's static twin (scenes::StaticTwin), as the spread table and
+// results.json name it beside the modes.
+inline const std::string kStaticTwinPlain = "plain-static-twin";
+inline const std::string kTrafficErrorRemoved = "traffic_error_removed";
 
 struct MetricName {
   std::string text;  // as written
@@ -80,6 +88,12 @@ SpreadTable Summarize(const std::vector<RepeatRun>& runs);
 // The spread of `metric` of `mode` on `pass`; nullptr where the table has none.
 const Spread* FindSpread(const SpreadTable& table, const std::string& pass, const std::string& mode,
                          const std::string& metric);
+
+// The share of the error that the scenario's traffic adds to plain which `mode` removes,
+// from the medians of ate_rmse_m on `pass`: (plain - mode) / (plain - plain on the static
+// twin). 1: the mode does as well as plain with nothing moving; 0: as badly as plain; NaN
+// without the twin's figure, a run without a value, or no added error to remove.
+double TrafficErrorRemoved(const SpreadTable& table, const std::string& pass, const std::string& mode);
 
 struct ExpectationResult {
   Expectation expectation;

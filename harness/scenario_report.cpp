@@ -164,6 +164,34 @@ Table RelocalizationTable(const ScenarioReport& report) {
   return reloc;
 }
 
+// With the static twin: per pass and mode, the share of the traffic's added error the
+// mode removes, beside its ATE and its ratio to plain.
+Table StaticTwinTable(const ScenarioReport& report) {
+  Table table{"The static twin: the share of the traffic's added error each mode removes",
+              "ATE rmse as above (median over repeats). Plain on the static twin is plain on the same world "
+              "with nothing moving through it (" +
+                  report.static_twin_dataset_dir +
+                  "). Removed: (plain - mode) / (plain - plain on the static twin); 100 % is as good as plain "
+                  "with nothing moving, 0 % as bad as plain among the traffic; n/a where the traffic adds no "
+                  "error to plain.",
+              {"sequence", "plain on the static twin [m]", "mode", "ATE rmse [m]", "ratio to plain", "removed [%]"},
+              {}};
+  for (const auto& pass : kScenarioPasses) {
+    const Spread* twin = FindSpread(report.spreads, pass, kStaticTwinPlain, "ate_rmse_m");
+    const Spread* plain = FindSpread(report.spreads, pass, "plain", "ate_rmse_m");
+    for (const std::string& mode : report.bench.modes) {
+      const Spread* ate = FindSpread(report.spreads, pass, mode, "ate_rmse_m");
+      const double ratio = ate != nullptr && plain != nullptr ? ate->median / plain->median : kNaN;
+      const double removed = TrafficErrorRemoved(report.spreads, pass, mode);
+      table.rows.push_back({report.scenario_name + " " + pass, twin == nullptr ? "n/a" : SpreadText(*twin, 4), mode,
+                            Cell(report.spreads, pass, mode, "ate_rmse_m", 4),
+                            std::isnan(ratio) ? "n/a" : fmt::format("{:.2f}", ratio),
+                            std::isnan(removed) ? "n/a" : fmt::format("{:.0f}", 100 * removed)});
+    }
+  }
+  return table;
+}
+
 // Rows only for mutual: plain knows no instances; mask-moveable drops moveable instances
 // unjudged.
 Table MovingDetectionTable(const ScenarioReport& report) {
@@ -178,7 +206,7 @@ Table MovingDetectionTable(const ScenarioReport& report) {
                {}};
   for (const auto& pass : kScenarioPasses) {
     for (const auto& mode : report.bench.modes) {
-      if (mode != "mutual") continue;
+      if (mode != "mutual" && mode != "mutual-sparse") continue;
       moving.rows.push_back({report.scenario_name + " " + pass, mode,
                              Cell(report.spreads, pass, mode, "moving_precision", 1, 100),
                              Cell(report.spreads, pass, mode, "moving_recall", 1, 100),
@@ -190,28 +218,36 @@ Table MovingDetectionTable(const ScenarioReport& report) {
   return moving;
 }
 
-// Where the judgement misses (mutual only): coverage and precision by distance band and
-// by class, per pass.
+// Where the judgement misses (the judging modes but the oracle): coverage and precision by
+// distance band and by class, per pass and mode.
 Table MovingBreakdownTable(const ScenarioReport& report) {
-  Table table{"Moving-object detection of mutual by distance and class [%]",
+  Table table{"Moving-object detection by distance and class [%]",
               std::string(kSpreadNote) +
                   " Coverage and precision as above, of the (frame, instance) pairs whose ground-truth object "
                   "lies in that band of distance from the camera (its tracks.json pose) or is of that class; n/a: "
-                  "none seen moving (coverage) or none judged moving (precision).",
+                  "none seen moving (coverage) or none judged moving (precision). mutual judges from the depth of "
+                  "each instance's pixels, mutual-sparse from re-found sparse features, as the paper.",
               {"objects"},
               {}};
-  if (std::find(report.bench.modes.begin(), report.bench.modes.end(), "mutual") == report.bench.modes.end()) {
-    return table;
+  std::vector<std::string> judging;
+  for (const std::string& mode : report.bench.modes) {
+    if (mode == "mutual" || mode == "mutual-sparse") judging.push_back(mode);
   }
+  if (judging.empty()) return table;
   for (const auto& pass : kScenarioPasses) {
-    table.header.push_back(std::string(pass) + " coverage");
-    table.header.push_back(std::string(pass) + " precision");
+    for (const std::string& mode : judging) {
+      const std::string suffix = judging.size() > 1 ? " (" + mode + ")" : "";
+      table.header.push_back(std::string(pass) + " coverage" + suffix);
+      table.header.push_back(std::string(pass) + " precision" + suffix);
+    }
   }
   const auto add_row = [&](const std::string& label, const std::string& group) {
     std::vector<std::string> row = {label};
     for (const auto& pass : kScenarioPasses) {
-      row.push_back(Cell(report.spreads, pass, "mutual", "moving_coverage_" + group, 1, 100));
-      row.push_back(Cell(report.spreads, pass, "mutual", "moving_precision_" + group, 1, 100));
+      for (const std::string& mode : judging) {
+        row.push_back(Cell(report.spreads, pass, mode, "moving_coverage_" + group, 1, 100));
+        row.push_back(Cell(report.spreads, pass, mode, "moving_precision_" + group, 1, 100));
+      }
     }
     table.rows.push_back(row);
   };
@@ -253,6 +289,7 @@ std::vector<Table> ReportTables(const ScenarioReport& report) {
   tables.push_back(RpeTable(report));
   tables.push_back(SegmentationTable(report));
   tables.push_back(RelocalizationTable(report));
+  if (!report.static_twin_runs.empty()) tables.push_back(StaticTwinTable(report));
   if (Table moving = MovingDetectionTable(report); !moving.rows.empty()) tables.push_back(std::move(moving));
   if (Table breakdown = MovingBreakdownTable(report); !breakdown.rows.empty()) tables.push_back(std::move(breakdown));
   tables.push_back(RunsTable(report));
@@ -299,7 +336,7 @@ nlohmann::json ScenarioReport::ToJson() const {
       {"bench",
        {{"modes", bench.modes}, {"repeats", bench.repeats}, {"segmenter", bench.segmenter},
         {"segmenter_strength", bench.segmenter_strength}, {"seed", bench.seed}, {"refiner", bench.refiner},
-        {"tracker", bench.tracker}}},
+        {"tracker", bench.tracker}, {"static_twin", bench.static_twin}}},
       {"options",
        {{"tracker", slam::TrackerOptionRegistry().ToJson(bench.TrackerOverrides())},
         {"refiner", seg::RefinerOptionRegistry().ToJson(bench.LoopRefinerOptions())}}},
@@ -326,6 +363,19 @@ nlohmann::json ScenarioReport::ToJson() const {
                                                {"min", NumberJson(s.min)}, {"max", NumberJson(s.max)}};
       }
     }
+  }
+  if (!static_twin_runs.empty()) {
+    nlohmann::json twin = {{"dataset", static_twin_dataset_dir}, {"runs", nlohmann::json::array()}};
+    for (const RepeatRun& run : static_twin_runs) {
+      twin["runs"].push_back({{"mode", run.mode}, {"run_dir", run.run_dir}, {"seconds", run.seconds},
+                              {"evaluation", run.evaluation.ToJson()}});
+    }
+    for (const auto& pass : kScenarioPasses) {
+      for (const std::string& mode : bench.modes) {
+        twin[kTrafficErrorRemoved][pass][mode] = NumberJson(TrafficErrorRemoved(spreads, pass, mode));
+      }
+    }
+    json["static_twin"] = twin;
   }
   for (const ExpectationResult& r : checks) {
     json["expectations"].push_back({{"metric", r.expectation.name.text},

@@ -32,6 +32,10 @@ struct ScenarioReport {
   int frames_per_pass = 0;  // --frames; 0 = the scenario's own
   BenchSettings bench;
   std::vector<RepeatRun> runs;
+  // BenchSettings::static_twin: plain's run on the static twin, and its dataset. Its
+  // metrics are in `spreads` as mode kStaticTwinPlain.
+  std::vector<RepeatRun> static_twin_runs;
+  std::string static_twin_dataset_dir;
   SpreadTable spreads;
   std::vector<ExpectationResult> checks;
   // The scenario's expectations this run could not check (--modes left a mode out).

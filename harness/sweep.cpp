@@ -15,6 +15,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/json_file.h"
+#include "core/statistics.h"
 #include "core/strings.h"
 #include "core/yaml_file.h"
 #include "harness/dataset_run.h"
@@ -422,6 +423,51 @@ ReportTable SweepTable(const SweepGrid& grid, const std::vector<nlohmann::json>&
   return table;
 }
 
+// The share of the traffic's added error each mode removes (points run with the static
+// twin, harness/scenario_expectations.h), per pass: the median over the points and the
+// worst point. Empty when no point ran the twin.
+ReportTable TrafficErrorRemovedTable(const SweepGrid& grid, const std::vector<nlohmann::json>& results,
+                                     const SweepContents& contents) {
+  ReportTable table;
+  table.caption = "The share of the traffic's added error each mode removes, (plain - mode) / (plain - plain on "
+                  "the static twin), over the points that ran the static twin: median and worst point";
+  table.header = {"mode", "points"};
+  for (const std::string pass : {"pass1", "pass2"}) {
+    table.header.push_back(pass + " median [%]");
+    table.header.push_back(pass + " worst [%]");
+    table.header.push_back(pass + " worst point");
+  }
+  for (const std::string& mode : contents.modes) {
+    if (mode == "plain") continue;
+    std::vector<std::string> row = {mode, ""};
+    int points = 0;
+    for (const std::string pass : {"pass1", "pass2"}) {
+      std::vector<double> removed;
+      int worst = -1;
+      double worst_value = kNaN;
+      for (int p = 0; p < grid.PointCount(); ++p) {
+        const nlohmann::json& r = results[static_cast<size_t>(p)];
+        if (!r.contains("static_twin")) continue;
+        const nlohmann::json& of_pass = r["static_twin"].value(kTrafficErrorRemoved, nlohmann::json::object());
+        const double value = of_pass.contains(pass) ? NumberOrNaN(of_pass[pass], mode.c_str()) : kNaN;
+        if (std::isnan(value)) continue;
+        removed.push_back(value);
+        if (worst < 0 || value < worst_value) {
+          worst = p;
+          worst_value = value;
+        }
+      }
+      points = std::max(points, static_cast<int>(removed.size()));
+      row.push_back(removed.empty() ? "n/a" : Cell(100 * Median(removed), "{:.0f}"));
+      row.push_back(Cell(100 * worst_value, "{:.0f}"));
+      row.push_back(worst < 0 ? "n/a" : Join(grid.PointAssignments(worst), ", "));
+    }
+    row[1] = std::to_string(points);
+    if (points > 0) table.rows.push_back(row);
+  }
+  return table;
+}
+
 // sweep_results.json: the grid, and per point its assignments, folder, code version and
 // summary.
 nlohmann::json MergedResults(const SweepGrid& grid, const std::vector<nlohmann::json>& results) {
@@ -554,6 +600,10 @@ std::string MergeSweep(const std::vector<fs::path>& inputs, const fs::path& out_
   ReportDocument document = SweepDocument(sweep, grid, results);
   document.AddHeading("Results per point", 2);
   document.AddTable(table);
+  if (const ReportTable removed = TrafficErrorRemovedTable(grid, results, contents); !removed.rows.empty()) {
+    document.AddHeading("The traffic's added error removed (static twin)", 2);
+    document.AddTable(removed);
+  }
   document.AddParagraph("Each point's own report (tables, trajectories) is in points/<point>/report.html.");
   if (!grid.axes.empty()) AddSweepPlots(grid, results, contents, out_dir, &document);
   WriteFileAtomically(out_dir / "sweep_results.json", MergedResults(grid, results).dump(2) + "\n");

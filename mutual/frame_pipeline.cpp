@@ -13,6 +13,13 @@ double MillisecondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 
+// The tracker's options as the mode has them: mutual-sparse judges as the paper does.
+slam::TrackerOptions TrackerOptionsFor(const FramePipelineOptions& options) {
+  slam::TrackerOptions tracker = options.tracker;
+  if (options.mode == SlamMode::kMutualSparse) tracker.judge_by_depth = false;
+  return tracker;
+}
+
 }  // namespace
 
 slam::FrameInstances ToFrameInstances(const seg::FrameSegmentation& segmentation, cv::Size size) {
@@ -30,7 +37,7 @@ FramePipeline::FramePipeline(const PinholeCamera& camera, const FramePipelineOpt
       options_(options),
       segmenter_(segmenter),
       motion_(motion),
-      tracker_(camera, options.tracker),
+      tracker_(camera, TrackerOptionsFor(options)),
       refiner_(options.refiner) {
   const std::string mode = ToString(options.mode);
   if (UsesMasks(options.mode) && segmenter == nullptr) throw Error("mode " + mode + " needs instance masks");

@@ -103,7 +103,7 @@ class FramePipeline {
   const FramePipelineOptions& options() const { return options_; }
 
  private:
-  bool RefinesMasks() const { return options_.mode == SlamMode::kMutual && options_.refine_masks; }
+  bool RefinesMasks() const { return IsMutualLoop(options_.mode) && options_.refine_masks; }
   void Refine(const RgbdFrame& frame, const std::optional<Eigen::Isometry3d>& T_wc_coarse, FrameStep* step);
   void Record(const slam::FrameResult& frame);
 

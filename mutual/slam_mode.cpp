@@ -9,6 +9,7 @@ std::string ToString(SlamMode mode) {
     case SlamMode::kPlain: return "plain";
     case SlamMode::kMaskMoveable: return "mask-moveable";
     case SlamMode::kMutual: return "mutual";
+    case SlamMode::kMutualSparse: return "mutual-sparse";
     case SlamMode::kOracle: return "oracle";
   }
   return "?";
@@ -16,7 +17,8 @@ std::string ToString(SlamMode mode) {
 
 const std::vector<std::string>& SlamModeNames() {
   static const std::vector<std::string> names = {ToString(SlamMode::kPlain), ToString(SlamMode::kMaskMoveable),
-                                                 ToString(SlamMode::kMutual), ToString(SlamMode::kOracle)};
+                                                 ToString(SlamMode::kMutual), ToString(SlamMode::kMutualSparse),
+                                                 ToString(SlamMode::kOracle)};
   return names;
 }
 
@@ -27,10 +29,11 @@ const std::vector<std::string>& PaperModeNames() {
 }
 
 SlamMode ParseSlamMode(const std::string& name) {
-  for (const SlamMode mode : {SlamMode::kPlain, SlamMode::kMaskMoveable, SlamMode::kMutual, SlamMode::kOracle}) {
+  for (const SlamMode mode :
+       {SlamMode::kPlain, SlamMode::kMaskMoveable, SlamMode::kMutual, SlamMode::kMutualSparse, SlamMode::kOracle}) {
     if (name == ToString(mode)) return mode;
   }
-  throw Error("unknown SLAM mode '" + name + "' (expected plain, mask-moveable, mutual or oracle)");
+  throw Error("unknown SLAM mode '" + name + "' (expected plain, mask-moveable, mutual, mutual-sparse or oracle)");
 }
 
 }  // namespace segslam::mutual

@@ -10,7 +10,9 @@ namespace segslam::mutual {
 enum class SlamMode {
   kPlain,         // no masks at all (ORB-SLAM2-like)
   kMaskMoveable,  // every feature on a moveable-class instance dropped (DynaSLAM-like)
-  kMutual,        // the paper: moving/static judgement per instance
+  kMutual,        // the paper's loop: moving/static judgement per instance, from the
+                  // depth of its pixels (slam::TrackerOptions::judge_by_depth)
+  kMutualSparse,  // the same loop judging from re-found sparse features, as the paper does
   kOracle,        // mutual with the ground truth's verdicts (seg::GroundTruthMotion):
                   // mutual as it would run if its judgement were never wrong
 };
@@ -28,6 +30,10 @@ SlamMode ParseSlamMode(const std::string& name);
 inline bool UsesMasks(SlamMode mode) { return mode != SlamMode::kPlain; }
 // Whether a mode judges instances moving or static (and so keeps only the background in
 // its long-term map).
-inline bool JudgesInstances(SlamMode mode) { return mode == SlamMode::kMutual || mode == SlamMode::kOracle; }
+inline bool JudgesInstances(SlamMode mode) {
+  return mode == SlamMode::kMutual || mode == SlamMode::kMutualSparse || mode == SlamMode::kOracle;
+}
+// Whether a mode runs the paper's whole loop, refining the segmenter's masks with SLAM.
+inline bool IsMutualLoop(SlamMode mode) { return mode == SlamMode::kMutual || mode == SlamMode::kMutualSparse; }
 
 }  // namespace segslam::mutual

@@ -628,4 +628,16 @@ void ApplyOverrides(Scenario& scenario, const std::vector<std::string>& assignme
   if (!assignments.empty()) ReplaceWithEdited(scenario, root, origin);
 }
 
+Scenario StaticTwin(const Scenario& scenario) {
+  Scenario twin = scenario;
+  std::vector<std::string> changes = {"name=" + scenario.name + "_static_twin"};
+  if (scenario.kind == "city") {
+    changes.insert(changes.end(), {"city.moving_cars=0", "city.pedestrians=0"});
+  } else {
+    changes.push_back("office.people_walking=0");
+  }
+  ApplyOverrides(twin, changes);
+  return twin;
+}
+
 }  // namespace segslam::scenes

@@ -143,6 +143,14 @@ void ApplyOverride(Scenario& scenario, const std::string& dotted_key, const std:
 // where it came from.
 void ApplyOverrides(Scenario& scenario, const std::vector<std::string>& assignments);
 
+// The scenario's static twin: the same world, routes and sensor with what moves through
+// it taken away (city: moving cars and pedestrians; office: the walkers), named
+// NAME_static_twin. Every other part of a world draws from a random stream of its own
+// (named by what it builds), so the streets, parked vehicles, rooms and camera paths stay
+// exactly as they were. Kept: a city's red-light lead vehicles (the camera's stops are
+// placed behind them) and an office's sitters (their chairs are part of the room).
+Scenario StaticTwin(const Scenario& scenario);
+
 // The full effective configuration (every key, defaults included, plus `expect` and
 // `bench`), for reports that echo what ran. ParseScenario(Dump(ScenarioToYaml(s))) reproduces s.
 YAML::Node ScenarioToYaml(const Scenario& scenario);

@@ -90,6 +90,15 @@ InstanceSnapshot Tracker::Impl::Snapshot() const {
   for (size_t k = 0; k < rows.size(); ++k) {
     current.features.descriptors.row(rows[k]).copyTo(snapshot.descriptors.row(static_cast<int>(k)));
   }
+  if (judged && JudgesByDepth()) {
+    snapshot.T_wc = T_wc;
+    snapshot.depth_m = current.depth_m.clone();  // the caller may reuse the frame's buffers
+    for (const auto& [id, samples_c] : current.depth_samples_c) {
+      std::vector<Eigen::Vector3d>& samples_w = snapshot.depth_samples_w[id];
+      samples_w.reserve(samples_c.size());
+      for (const Eigen::Vector3d& p_c : samples_c) samples_w.push_back(T_wc * p_c);
+    }
+  }
   return snapshot;
 }
 

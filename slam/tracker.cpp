@@ -240,6 +240,14 @@ std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& ins
   const std::optional<Eigen::Isometry3d> background_T_cw =
       s.coarse_ok ? s.BackgroundPose(instances.moveable_ids) : std::nullopt;
   const Eigen::Isometry3d T_wc = background_T_cw.value_or(s.current.T_cw).inverse();
+  // The judgement from depth measures against the remembered frame a baseline back (or
+  // the oldest there is, which can show motion but not stillness).
+  const bool by_depth = s.JudgesByDepth();
+  if (by_depth) s.SampleInstanceDepth(instances.ids);
+  const InstanceSnapshot* past =
+      by_depth && !s.history.empty() && !s.history.front().depth_m.empty() ? &s.history.front() : nullptr;
+  const bool depth_full_baseline =
+      past != nullptr && s.current.stamp_s - past->stamp_s >= options_.motion_baseline_s - 1e-6;
   std::vector<InstanceJudgement> judgements;
   for (const auto& [id, features] : features_of) {
     InstanceJudgement judgement;
@@ -247,7 +255,25 @@ std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& ins
     judgement.moveable_class = instances.moveable_ids.count(id) > 0;
     judgement.num_features = static_cast<int>(features.size());
     InstanceMotionMemory& memory = s.motion_memory[id];
-    if (s.coarse_ok) {
+    if (s.coarse_ok && by_depth) {
+      // Depth sees an object come, go or cross the view; the sparse features see what
+      // depth cannot, a flat textured surface sliding within its own plane (a torso
+      // walking across the view at arm's length). Either one seeing motion is motion.
+      InstanceJudgement sparse = judgement;
+      MotionEvidence evidence;
+      const bool trust_young_points = memory.static_frames >= options_.static_frames_to_trust_young_points;
+      const bool sparse_full_baseline =
+          s.MeasureInstanceMotion(id, features, T_wc, trust_young_points, &sparse, &evidence);
+      s.DecideMotion(sparse_full_baseline, evidence, &sparse);
+      DepthVotes votes;
+      if (past != nullptr) votes = s.MeasureDepthMotion(id, T_wc, *past, &judgement);
+      if (given_moving_ids != nullptr) {
+        judgement.judged = true;
+        judgement.moving = given_moving_ids->count(id) > 0;
+      } else {
+        s.DecideFromDepth(votes, depth_full_baseline, sparse.moving, &judgement, &memory);
+      }
+    } else if (s.coarse_ok) {
       // Once an instance has been seen still over a full baseline, its young points serve
       // again (a parked car stays parked); until then, or once it moves, they do not.
       const bool trust_young_points = memory.static_frames >= options_.static_frames_to_trust_young_points;

@@ -130,6 +130,34 @@ struct FrameResult {
   std::vector<FeatureRecord> feature_records;
 };
 
+// The judgement from depth (TrackerOptions::judge_by_depth): every instance's depth
+// pixels, carried by the background's motion into a frame motion_baseline_s back and
+// compared with the depth measured there, both ways; the verdicts accumulate along the
+// instance's track id as a log-odds of moving (slam/depth_judgement.cpp).
+struct DepthJudgementOptions {
+  // Interior pixels of an instance sampled per frame (on a grid as fine as this allows).
+  int samples_per_instance = 200;
+  // A sample's mask and depth must agree this many pixels around it: on a silhouette the
+  // depth reads either side of the edge, and a small pose error moves it across.
+  int interior_margin_px = 2;
+  // A frame measures an instance on at least this many samples that land on valid depth.
+  int min_samples = 12;
+  // A frame sees the instance move when at least this share of its measured samples is
+  // contradicted (the depth there lies beyond moving_distance_m + moving_distance_per_m
+  // * depth): a car moving along its length vacates only its ends, and the depth noise
+  // of a still one at 40 m contradicts a few in ten.
+  double moving_share = 0.25;
+  // Log-odds of moving: a frame that sees the instance move raises them to at least
+  // moving_log_odds (a still past does not outweigh it), one that sees it still over a
+  // full baseline takes static_log_odds, both within +-max_log_odds. An instance is
+  // moving while they are above 0, still below 0, not yet judged at 0. Seen moving for
+  // long, it needs max_log_odds / static_log_odds frames seen still to enter the pose
+  // and map again.
+  double moving_log_odds = 1.0;
+  double static_log_odds = 0.5;
+  double max_log_odds = 3.0;
+};
+
 struct TrackerOptions {
   OrbExtractorOptions orb;
   // Depth noise at 1 m in metres (> 0; grows with depth squared). Depth enters the
@@ -242,6 +270,13 @@ struct TrackerOptions {
   // 1-2 cm per frame, under the threshold) until the instance has been judged static
   // over a full baseline on this many frames in a row (a parked car stays parked).
   int static_frames_to_trust_young_points = 10;
+  // How instances are judged: from the depth of every instance pixel
+  // (DepthJudgementOptions), or, with false, from re-found sparse features as the paper
+  // does (the options above from moving_distance_m on). Without depth images, always the
+  // latter. moving_distance_m, moving_distance_per_m, motion_baseline_s,
+  // min_points_to_move_fixed_class and moving_memory_s serve both.
+  bool judge_by_depth = true;
+  DepthJudgementOptions depth_judgement;
   // Long-term map export: points seen in at least this many keyframes.
   int long_term_min_observations = 2;
   // The first keyframe needs this many features with depth that may enter the map (in

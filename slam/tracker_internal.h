@@ -119,6 +119,19 @@ struct InstanceSnapshot {
   std::vector<std::uint16_t> instance;          // per stored feature
   std::vector<Eigen::Vector3d> point_w;         // NaN where no depth
   cv::Mat descriptors;                          // rows = stored features
+  // For the judgement from depth (empty when it did not run on that frame): the frame's
+  // pose, depth image and each instance's depth samples in the world.
+  Eigen::Isometry3d T_wc = Eigen::Isometry3d::Identity();
+  cv::Mat depth_m;
+  std::map<std::uint16_t, std::vector<Eigen::Vector3d>> depth_samples_w;
+};
+
+// A frame's verdict on one instance from its depth samples: how many landed on valid
+// depth in the other frame and agree with it, how many it contradicts.
+struct DepthVotes {
+  int still = 0;
+  int moving = 0;
+  int measured() const { return still + moving; }
 };
 
 // The 3-D displacements measured on one instance. A moving rigid object moves all its
@@ -157,6 +170,10 @@ struct InstanceMotionMemory {
   int moving_frames = 0;  // measured moving, frames in a row (none moving_memory_s apart)
   double last_moving_stamp_s = -1e9;
   int static_frames = 0;  // judged static over a full baseline, frames in a row
+  // The judgement from depth: log-odds of moving (DepthJudgementOptions), and when a
+  // frame last measured the instance.
+  double moving_log_odds = 0;
+  double last_measured_stamp_s = -1e9;
 };
 
 struct WorkingFrame {
@@ -174,6 +191,8 @@ struct WorkingFrame {
   // For a background feature, the instance whose mask lies within
   // TrackerOptions::instance_margin_px (0 = none): kept out with that instance.
   std::vector<std::uint16_t> near_instance;
+  // The judgement from depth: each instance's interior depth samples, camera frame.
+  std::map<std::uint16_t, std::vector<Eigen::Vector3d>> depth_samples_c;
   Eigen::Isometry3d T_cw = Eigen::Isometry3d::Identity();
 };
 
@@ -358,6 +377,28 @@ struct Tracker::Impl {
   void DecideMotion(bool full_baseline, const MotionEvidence& evidence, InstanceJudgement* judgement) const;
   void ApplyMotionMemory(bool full_baseline, InstanceJudgement* judgement, InstanceMotionMemory* memory) const;
   void KeepOutOfPoseAndMap(const InstanceJudgement& judgement, const std::vector<int>& features);
+
+  // ------------------------------------------- judgement from depth (depth_judgement.cpp)
+
+  // Whether this frame is judged from depth (TrackerOptions::judge_by_depth, and a depth
+  // image to judge with).
+  bool JudgesByDepth() const { return options.judge_by_depth && !current.depth_m.empty(); }
+  // Fills current.depth_samples_c: up to samples_per_instance interior pixels of each
+  // instance with depth, back-projected.
+  void SampleInstanceDepth(const cv::Mat& ids);
+  // Counts into *votes how many of the world points `points_w`, seen from T_cw in a frame
+  // with depth `depth_m`, agree with that depth and how many lie before it (the depth
+  // there is farther: what was there has gone). Points behind something are not counted.
+  void VoteAgainstDepth(const std::vector<Eigen::Vector3d>& points_w, const Eigen::Isometry3d& T_cw,
+                        const cv::Mat& depth_m, DepthVotes* votes) const;
+  // This frame's measurement of instance `id` against the remembered frame `past`, in
+  // both directions; the counts go to judgement->num_points / num_moving_points.
+  DepthVotes MeasureDepthMotion(std::uint16_t id, const Eigen::Isometry3d& T_wc, const InstanceSnapshot& past,
+                                InstanceJudgement* judgement) const;
+  // The verdict: this frame's votes (and whether the sparse features saw the instance
+  // move) added to the instance's log-odds of moving.
+  void DecideFromDepth(const DepthVotes& votes, bool full_baseline, bool sparse_moving, InstanceJudgement* judgement,
+                       InstanceMotionMemory* memory) const;
   void KeepOutNearbyBackground(std::uint16_t id);
 
   // ------------------------------------------- mapping (local_mapping.cpp)

@@ -282,4 +282,56 @@ TEST_F(ScenarioCliTest, TinyRunWritesTheReportAndItsExitCodeFollowsTheThresholds
   EXPECT_TRUE(fs::exists(records[0]));
 }
 
+// With bench.static_twin, plain also runs on the same office without its walkers, and
+// each mode's share of the walkers' added error it removes is reported, usable in
+// expect:; its value is (plain - mode) / (plain - plain on the twin) of the medians.
+TEST_F(ScenarioCliTest, StaticTwinGivesEachModesShareOfTheTrafficsErrorRemoved) {
+  const fs::path scenario = WriteScenario("twin",
+                                          "bench: {segmenter: gt, static_twin: true}\n"
+                                          "expect:\n"
+                                          "  pass2.mutual.traffic_error_removed: {min: -1000}\n");
+  const fs::path report = dir_ / "report";
+  const CommandOutput result = Run("scenario run " + scenario.string() + " --frames 25 --modes plain,mutual -q --cache " +
+                                   (dir_ / "cache").string() + " --out " + report.string());
+  const nlohmann::json results = nlohmann::json::parse(ReadText(report / "results.json"));
+  // The expectation holds where the walkers added error to plain; without, it has no
+  // value and fails (exit code 2).
+  const bool added = !results["static_twin"]["traffic_error_removed"]["pass2"]["mutual"].is_null();
+  EXPECT_EQ(result.exit_code, added ? 0 : 2) << result.stdout_text << result.stderr_text;
+  EXPECT_EQ(results["bench"]["static_twin"], true);
+  const nlohmann::json& twin = results["static_twin"];
+  EXPECT_NE(twin["dataset"].get<std::string>().find("office_small_static_twin-"), std::string::npos);
+  ASSERT_EQ(twin["runs"].size(), 1u);
+  EXPECT_EQ(twin["runs"][0]["mode"], "plain");
+  EXPECT_TRUE(fs::exists(report / twin["runs"][0]["run_dir"].get<std::string>() / "pass1" / "trajectory.txt"));
+  for (const char* pass : {"pass1", "pass2"}) {
+    SCOPED_TRACE(pass);
+    const nlohmann::json& summary = results["summary"][pass];
+    const double plain = summary["plain"]["ate_rmse_m"]["median"];
+    const double mutual = summary["mutual"]["ate_rmse_m"]["median"];
+    const double still = summary["plain-static-twin"]["ate_rmse_m"]["median"];
+    EXPECT_EQ(summary["plain-static-twin"]["ate_rmse_m"]["runs"], 1);
+    const nlohmann::json& removed = twin["traffic_error_removed"][pass];
+    if (plain > still) {
+      EXPECT_NEAR(removed["mutual"].get<double>(), (plain - mutual) / (plain - still), 1e-9);
+      EXPECT_EQ(removed["plain"].get<double>(), 0.0);
+    } else {
+      EXPECT_TRUE(removed["mutual"].is_null()) << "no added error to remove";
+    }
+  }
+  EXPECT_NE(ReadText(report / "report.md").find("The static twin"), std::string::npos);
+
+  // Without the twin there is nothing to measure against: refused before any work.
+  const fs::path without = WriteScenario("no_twin",
+                                         "bench: {segmenter: gt}\n"
+                                         "expect:\n"
+                                         "  pass2.mutual.traffic_error_removed: {min: 0.5}\n");
+  const CommandOutput refused = Run("scenario run " + without.string() + " --frames 3 -q --cache " +
+                                    (dir_ / "cache2").string() + " --out " + (dir_ / "report2").string());
+  EXPECT_EQ(refused.exit_code, 1);
+  EXPECT_NE(refused.stderr_text.find("needs the static twin (bench: {static_twin: true}"), std::string::npos)
+      << refused.stderr_text;
+  EXPECT_FALSE(fs::exists(dir_ / "cache2"));
+}
+
 }  // namespace

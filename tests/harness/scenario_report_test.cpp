@@ -116,6 +116,40 @@ TEST(ScenarioReportTest, ChecksUseMediansAndRatiosOfMedians) {
   EXPECT_FALSE(results[2].passed);  // no pass-2 value: NaN fails
 }
 
+// The share of the traffic's added error removed, from hand-made medians: plain 0.5 m with
+// traffic and 0.1 m on the static twin, so the traffic adds 0.4 m; mutual at 0.14 m removes
+// 90 % of it, mask-moveable at 0.3 m half, and a mode worse than plain a negative share.
+TEST(ScenarioReportTest, TrafficErrorRemovedIsMeasuredAgainstThePlainOfTheStaticTwin) {
+  SpreadTable table;
+  table["pass2"]["plain"]["ate_rmse_m"] = SpreadOf({0.5});
+  table["pass2"][kStaticTwinPlain]["ate_rmse_m"] = SpreadOf({0.1});
+  table["pass2"]["mutual"]["ate_rmse_m"] = SpreadOf({0.12, 0.14, 0.2});
+  table["pass2"]["mask-moveable"]["ate_rmse_m"] = SpreadOf({0.3});
+  table["pass2"]["oracle"]["ate_rmse_m"] = SpreadOf({0.7});
+  EXPECT_NEAR(TrafficErrorRemoved(table, "pass2", "mutual"), 0.9, 1e-12);
+  EXPECT_NEAR(TrafficErrorRemoved(table, "pass2", "mask-moveable"), 0.5, 1e-12);
+  EXPECT_NEAR(TrafficErrorRemoved(table, "pass2", "oracle"), -0.5, 1e-12);
+  EXPECT_EQ(TrafficErrorRemoved(table, "pass2", "plain"), 0.0);
+  // No twin, or a twin that drifts as much as plain among the traffic: nothing to measure.
+  EXPECT_TRUE(std::isnan(TrafficErrorRemoved(table, "pass1", "mutual")));
+  table["pass2"][kStaticTwinPlain]["ate_rmse_m"] = SpreadOf({0.5});
+  EXPECT_TRUE(std::isnan(TrafficErrorRemoved(table, "pass2", "mutual")));
+
+  table["pass2"][kStaticTwinPlain]["ate_rmse_m"] = SpreadOf({0.1});
+  const std::vector<ExpectationResult> results = CheckExpectations(
+      ParseExpectations(YAML::Load("{pass2.mutual.traffic_error_removed: {min: 0.8},"
+                                   " pass2.mask-moveable.traffic_error_removed: {min: 0.8}}"),
+                        kModes, "s.yaml"),
+      table);
+  ASSERT_EQ(results.size(), 2u);
+  EXPECT_TRUE(results[0].passed);
+  EXPECT_NEAR(results[0].value, 0.9, 1e-12);
+  EXPECT_FALSE(results[1].passed);
+  // Measured against plain: a scenario without plain cannot name it.
+  EXPECT_NE(ParseError("mutual.traffic_error_removed", {"mutual"}).find("against plain, which does not run"),
+            std::string::npos);
+}
+
 // Two of three repeats without an ATE (a pass that lost its map): the one value that is
 // there must not pass the check for all three.
 TEST(ScenarioReportTest, ACheckFailsWhenARepeatLacksTheValue) {

@@ -304,6 +304,43 @@ TEST(MutualLoopTest, WalkingPersonIsJudgedMovingAndParkedCarStaticThroughTheLoop
   }
 }
 
+// mutual judges from depth samples of each instance, mutual-sparse from its re-found
+// sparse features only (the paper's judgement): a parked car 2 m away has far more depth
+// samples than features, and mutual-sparse never counts more measurements than features.
+TEST(MutualLoopTest, MutualSparseJudgesFromFeaturesAndMutualFromDepth) {
+  constexpr std::uint16_t kCar = 2;
+  constexpr int kCarCategory = 3;
+  const PinholeCamera camera = PinholeCamera::FromVerticalFov(640, 480, 50);
+  auto scene = RoomQuads(5);
+  const auto car_quads = BoxQuads({1.5, -1.7, 0.0}, {3.9, -0.2, 1.4}, 77, kCar);
+  scene.insert(scene.end(), car_quads.begin(), car_quads.end());
+  std::vector<RenderedFrame> frames;
+  for (int i = 0; i < 20; ++i) frames.push_back(RenderQuads(scene, camera, SwayingPose(i), i, i / 30.0));
+  // Per mode: the most measurements of one judgement, and of features, over the frames.
+  auto most_measured = [&](SlamMode mode, int* most_features) {
+    GroundTruthSegmenter segmenter(frames, {{kCar, kCarCategory}});
+    FramePipelineOptions options;
+    options.mode = mode;
+    options.tracker.initial_T_wc = SwayingPose(0);
+    FramePipeline loop(camera, options, &segmenter);
+    int most = 0;
+    *most_features = 0;
+    for (const RenderedFrame& frame : frames) {
+      for (const slam::InstanceJudgement& judgement : loop.ProcessFrame(frame.frame).slam.instances) {
+        most = std::max(most, judgement.num_points);
+        *most_features = std::max(*most_features, judgement.num_features);
+        if (mode == SlamMode::kMutualSparse) EXPECT_LE(judgement.num_points, judgement.num_features);
+      }
+    }
+    return most;
+  };
+  int sparse_features = 0, depth_features = 0;
+  const int sparse = most_measured(SlamMode::kMutualSparse, &sparse_features);
+  const int depth = most_measured(SlamMode::kMutual, &depth_features);
+  EXPECT_GT(sparse, 0);
+  EXPECT_GT(depth, 2 * depth_features) << "depth samples, both ways, outnumber the car's features";
+}
+
 TEST(MutualLoopTest, InvalidRefinerOptionsAreAnError) {
   const PinholeCamera camera = PinholeCamera::FromVerticalFov(64, 48, 50);
   std::vector<RenderedFrame> frames;

@@ -1,6 +1,7 @@
 #include "scenes/scenario.h"
 
 #include "core/error.h"
+#include "scenes/world.h"
 #include "test_util.h"
 
 #include <gtest/gtest.h>
@@ -343,6 +344,59 @@ TEST(ScenarioTest, ToYamlRoundTrips) {
   EXPECT_EQ(back.camera.distortion.k1, -0.28);
   EXPECT_EQ(back.camera.distortion.p2, 0.00002);
   EXPECT_EQ(back.seed, s.seed);
+}
+
+}  // namespace
+}  // namespace segslam::scenes
+
+namespace segslam::scenes {
+namespace {
+
+bool Moves(const Object& object) { return object.placement[0].moving || object.placement[1].moving; }
+
+// The static twin is the same world with what moves taken away: every object of the twin
+// stands where an object of the same class stands in the world, in both passes, and the
+// objects the twin lacks are exactly the world's movers; the camera routes are the same.
+TEST(StaticTwinTest, IsTheSameWorldWithItsMoversTakenAway) {
+  for (const char* file : {"test/city_small.yaml", "test/office_small.yaml"}) {
+    SCOPED_TRACE(file);
+    const Scenario scenario = LoadScenario(testing::ScenarioPath(file));
+    const Scenario twin_scenario = StaticTwin(scenario);
+    EXPECT_EQ(twin_scenario.name, scenario.name + "_static_twin");
+    const World world = BuildWorld(scenario);
+    const World twin = BuildWorld(twin_scenario);
+    std::vector<const Object*> still;
+    int movers = 0;
+    for (const Object& object : world.objects) {
+      if (Moves(object)) {
+        ++movers;
+      } else {
+        still.push_back(&object);
+      }
+    }
+    ASSERT_GT(movers, 0) << "the scenario must have movers to take away";
+    ASSERT_EQ(twin.objects.size(), still.size());
+    for (std::size_t k = 0; k < still.size(); ++k) {
+      const Object& a = *still[k];
+      const Object& b = twin.objects[k];
+      EXPECT_FALSE(Moves(b));
+      EXPECT_EQ(a.category_name, b.category_name) << "object " << k;
+      for (int pass = 0; pass < 2; ++pass) {
+        EXPECT_EQ(a.placement[pass].present, b.placement[pass].present) << "object " << k;
+        EXPECT_TRUE(a.placement[pass].T_world_object.isApprox(b.placement[pass].T_world_object, 1e-12))
+            << "object " << k << " (" << a.category_name << "), pass " << pass + 1;
+      }
+    }
+    for (int pass = 0; pass < 2; ++pass) {
+      const CameraRoute& route = world.camera_route[pass];
+      const CameraRoute& twin_route = twin.camera_route[pass];
+      ASSERT_EQ(route.keys.size(), twin_route.keys.size());
+      for (std::size_t k = 0; k < route.keys.size(); ++k) {
+        EXPECT_EQ(route.keys[k].stamp_s, twin_route.keys[k].stamp_s);
+        EXPECT_TRUE(route.keys[k].T_wc.isApprox(twin_route.keys[k].T_wc, 1e-12)) << "pass " << pass + 1 << " key " << k;
+      }
+    }
+  }
 }
 
 }  // namespace

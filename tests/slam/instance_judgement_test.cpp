@@ -1,7 +1,9 @@
-// The moving-state hysteresis of the instance judgement (slam/instance_judgement.cpp,
-// TrackerOptions moving_streak_frames, moving_memory_s, min_points_to_clear_moving and
-// static_frames_to_trust_young_points), through the tracker's public interface, on
-// ray-cast frames of a textured box in a textured room (tests/slam/synthetic_room.h).
+// The moving-state hysteresis of the paper's judgement from sparse features
+// (slam/instance_judgement.cpp, TrackerOptions::judge_by_depth off; moving_streak_frames,
+// moving_memory_s, min_points_to_clear_moving and static_frames_to_trust_young_points),
+// through the tracker's public interface, on ray-cast frames of a textured box in a
+// textured room (tests/slam/synthetic_room.h). The judgement from depth has its own
+// tests (depth_judgement_test.cpp).
 //
 // How much of the box a frame measures is set through its depth: features without depth
 // have no 3-D motion measurement, so a box whose depth the sensor loses (a dark or shiny
@@ -29,6 +31,13 @@ using testing::RenderQuads;
 using testing::RoomQuads;
 
 constexpr std::uint16_t kBoxId = 1;
+
+// The options of the judgement from sparse features, as mutual-sparse runs it.
+TrackerOptions SparseJudgement() {
+  TrackerOptions options;
+  options.judge_by_depth = false;
+  return options;
+}
 
 PinholeCamera TestCamera() { return PinholeCamera::FromVerticalFov(640, 480, 50); }
 
@@ -162,7 +171,7 @@ std::vector<ScriptedFrame> MoveAndStop(int moves, const std::vector<BoxDepth>& d
 // is enough to clear a box moved for fewer frames than a streak, and not one moved for a
 // full streak, which stays moving (and out of the pose and map).
 TEST(InstanceJudgementTest, OnlyAFullStreakOfMovingFramesKeepsAnObjectMovingAfterItStops) {
-  const TrackerOptions options;
+  const TrackerOptions options = SparseJudgement();
   const int streak = options.moving_streak_frames;
   ASSERT_GE(streak, 2);
   for (const int moves : {streak, streak - 1}) {
@@ -187,7 +196,7 @@ TEST(InstanceJudgementTest, OnlyAFullStreakOfMovingFramesKeepsAnObjectMovingAfte
 // against the one before: with depth on the whole box again after a frame with depth on
 // the patch only, it still finds the patch's features alone.
 TEST(InstanceJudgementTest, ObjectKeptMovingIsClearedOnlyByEnoughMeasuredFeatures) {
-  TrackerOptions options;
+  TrackerOptions options = SparseJudgement();
   const int moves = options.moving_streak_frames;
   const int stopped = LastMovingFrame(moves) + 1;
   const auto frames =
@@ -224,7 +233,7 @@ TEST(InstanceJudgementTest, ObjectKeptMovingIsClearedOnlyByEnoughMeasuredFeature
 // frames in between): a pause within moving_memory_s continues the streak, which keeps
 // the box moving once it stops; a longer one begins a new, shorter streak, which does not.
 TEST(InstanceJudgementTest, MovingFramesFartherApartThanMovingMemoryBeginANewStreak) {
-  const TrackerOptions options;
+  const TrackerOptions options = SparseJudgement();
   const int moves = options.moving_streak_frames;
   ASSERT_GE(moves, 3) << "the pause must split the streak into two shorter ones";
   const int stopped = LastMovingFrame(moves) + 1;
@@ -245,7 +254,7 @@ TEST(InstanceJudgementTest, MovingFramesFartherApartThanMovingMemoryBeginANewStr
 // after frame: it stays moving as long as its last moving verdict lies within
 // moving_memory_s, and no longer.
 TEST(InstanceJudgementTest, StreakKeepsAnObjectMovingForMovingMemoryAfterItsLastMovingFrame) {
-  const TrackerOptions options;
+  const TrackerOptions options = SparseJudgement();
   const int moves = options.moving_streak_frames;
   const int last_moving = LastMovingFrame(moves);
   const std::vector<BoxDepth> patches(5, BoxDepth::kPatch);
@@ -282,7 +291,7 @@ TEST(InstanceJudgementTest, YoungMapPointsJudgeAnInstanceOnlyOnceItWasJudgedStat
   std::vector<RenderedFrame> frames = Render(script);
 
   // Where the box's first points are made, on a run whose young points never judge.
-  TrackerOptions options;
+  TrackerOptions options = SparseJudgement();
   options.record_features = true;
   options.static_frames_to_trust_young_points = 1 << 20;
   const std::vector<FrameResult> reference = TrackMutual(frames, options);
