@@ -29,14 +29,16 @@ struct Region {
   int area = 0;
 };
 
-// Each instance's bounding box and pixel count, in one pass over the ids.
-std::map<std::uint16_t, Region> InstanceRegions(const cv::Mat& ids) {
+// Each instance's bounding box and pixel count, from every `step`-th pixel of every
+// `step`-th row (area in those pixels): enough to space the samples, at a fraction of a
+// pass over the whole image.
+std::map<std::uint16_t, Region> InstanceRegions(const cv::Mat& ids, int step) {
   std::map<std::uint16_t, Region> regions;
   std::uint16_t last_id = 0;
   Region* last = nullptr;
-  for (int v = 0; v < ids.rows; ++v) {
+  for (int v = 0; v < ids.rows; v += step) {
     const std::uint16_t* row = ids.ptr<std::uint16_t>(v);
-    for (int u = 0; u < ids.cols; ++u) {
+    for (int u = 0; u < ids.cols; u += step) {
       const std::uint16_t id = row[u];
       if (id == 0) continue;
       if (last == nullptr || id != last_id) {
@@ -63,9 +65,16 @@ void Tracker::Impl::SampleInstanceDepth(const cv::Mat& ids) {
   const DepthJudgementOptions& o = options.depth_judgement;
   const int m = o.interior_margin_px;
   const cv::Mat& depth = current.depth_m;
-  for (const auto& [id, region] : InstanceRegions(ids)) {
+  constexpr int kRegionStep = 2;
+  for (auto [id, region] : InstanceRegions(ids, kRegionStep)) {
+    // The box found on the coarse grid, widened by what the grid may have missed.
+    region.min_u = std::max(0, region.min_u - kRegionStep + 1);
+    region.min_v = std::max(0, region.min_v - kRegionStep + 1);
+    region.max_u = std::min(ids.cols - 1, region.max_u + kRegionStep - 1);
+    region.max_v = std::min(ids.rows - 1, region.max_v + kRegionStep - 1);
+    const double area = double(region.area) * kRegionStep * kRegionStep;
     // A grid fine enough for about samples_per_instance of the region's pixels.
-    const int stride = std::max(1, static_cast<int>(std::floor(std::sqrt(double(region.area) / o.samples_per_instance))));
+    const int stride = std::max(1, static_cast<int>(std::floor(std::sqrt(area / o.samples_per_instance))));
     std::vector<Eigen::Vector3d>& samples = current.depth_samples_c[id];
     for (int v = std::max(region.min_v, m); v <= std::min(region.max_v, ids.rows - 1 - m); v += stride) {
       const std::uint16_t* id_row = ids.ptr<std::uint16_t>(v);
@@ -128,6 +137,14 @@ DepthVotes Tracker::Impl::MeasureDepthMotion(std::uint16_t id, const Eigen::Isom
   return votes;
 }
 
+bool Tracker::Impl::DepthSeesMotion(const DepthVotes& votes, const InstanceJudgement& judgement) const {
+  const DepthJudgementOptions& o = options.depth_judgement;
+  const bool evidence_enough_to_move =
+      judgement.moveable_class || votes.measured() >= options.min_points_to_move_fixed_class;
+  return votes.measured() >= o.min_samples && evidence_enough_to_move &&
+         double(votes.moving) >= o.moving_share * votes.measured();
+}
+
 void Tracker::Impl::DecideFromDepth(const DepthVotes& votes, bool full_baseline, bool sparse_moving,
                                     InstanceJudgement* judgement, InstanceMotionMemory* memory) const {
   const DepthJudgementOptions& o = options.depth_judgement;
@@ -138,10 +155,7 @@ void Tracker::Impl::DecideFromDepth(const DepthVotes& votes, bool full_baseline,
     memory->static_frames = 0;
   }
   const bool measured = votes.measured() >= o.min_samples;
-  const bool evidence_enough_to_move =
-      judgement->moveable_class || votes.measured() >= options.min_points_to_move_fixed_class;
-  const bool depth_moving = measured && evidence_enough_to_move && judgement->moving_share >= o.moving_share;
-  if (depth_moving || sparse_moving) {
+  if (DepthSeesMotion(votes, *judgement) || sparse_moving) {
     // A still past does not outweigh a frame that sees motion: a parked car that pulls
     // out must leave the pose at once; a false alarm only keeps a still one out a while.
     memory->last_measured_stamp_s = current.stamp_s;

@@ -256,22 +256,30 @@ std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& ins
     judgement.num_features = static_cast<int>(features.size());
     InstanceMotionMemory& memory = s.motion_memory[id];
     if (s.coarse_ok && by_depth) {
-      // Depth sees an object come, go or cross the view; the sparse features see what
-      // depth cannot, a flat textured surface sliding within its own plane (a torso
-      // walking across the view at arm's length). Either one seeing motion is motion.
-      InstanceJudgement sparse = judgement;
-      MotionEvidence evidence;
-      const bool trust_young_points = memory.static_frames >= options_.static_frames_to_trust_young_points;
-      const bool sparse_full_baseline =
-          s.MeasureInstanceMotion(id, features, T_wc, trust_young_points, &sparse, &evidence);
-      s.DecideMotion(sparse_full_baseline, evidence, &sparse);
       DepthVotes votes;
       if (past != nullptr) votes = s.MeasureDepthMotion(id, T_wc, *past, &judgement);
+      // Depth sees an object come, go or cross the view; the sparse features see what
+      // depth cannot, a flat textured surface sliding within its own plane (a torso
+      // walking across the view at arm's length). Either one seeing motion is motion, so
+      // the features are asked only where depth did not see it.
+      bool sparse_moving = false;
+      if (!s.DepthSeesMotion(votes, judgement)) {
+        InstanceJudgement sparse;
+        sparse.id = id;
+        sparse.moveable_class = judgement.moveable_class;
+        sparse.num_features = judgement.num_features;
+        MotionEvidence evidence;
+        const bool trust_young_points = memory.static_frames >= options_.static_frames_to_trust_young_points;
+        const bool sparse_full_baseline =
+            s.MeasureInstanceMotion(id, features, T_wc, trust_young_points, &sparse, &evidence);
+        s.DecideMotion(sparse_full_baseline, evidence, &sparse);
+        sparse_moving = sparse.moving;
+      }
       if (given_moving_ids != nullptr) {
         judgement.judged = true;
         judgement.moving = given_moving_ids->count(id) > 0;
       } else {
-        s.DecideFromDepth(votes, depth_full_baseline, sparse.moving, &judgement, &memory);
+        s.DecideFromDepth(votes, depth_full_baseline, sparse_moving, &judgement, &memory);
       }
     } else if (s.coarse_ok) {
       // Once an instance has been seen still over a full baseline, its young points serve

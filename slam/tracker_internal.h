@@ -395,6 +395,8 @@ struct Tracker::Impl {
   // both directions; the counts go to judgement->num_points / num_moving_points.
   DepthVotes MeasureDepthMotion(std::uint16_t id, const Eigen::Isometry3d& T_wc, const InstanceSnapshot& past,
                                 InstanceJudgement* judgement) const;
+  // Whether this frame's votes show the instance moving.
+  bool DepthSeesMotion(const DepthVotes& votes, const InstanceJudgement& judgement) const;
   // The verdict: this frame's votes (and whether the sparse features saw the instance
   // move) added to the instance's log-odds of moving.
   void DecideFromDepth(const DepthVotes& votes, bool full_baseline, bool sparse_moving, InstanceJudgement* judgement,
