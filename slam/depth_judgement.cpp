@@ -82,7 +82,7 @@ void Tracker::Impl::SampleInstanceDepth(const cv::Mat& ids) {
       for (int u = std::max(region.min_u, m); u <= std::min(region.max_u, ids.cols - 1 - m); u += stride) {
         if (id_row[u] != id) continue;
         const float z = depth_row[u];
-        if (!(z > 0)) continue;
+        if (!(z > 0) || z > o.max_depth_m) continue;
         bool interior = true;
         for (const auto& [du, dv] : {std::pair{-m, 0}, std::pair{m, 0}, std::pair{0, -m}, std::pair{0, m}}) {
           if (ids.at<std::uint16_t>(v + dv, u + du) != id || !SameSurface(depth.at<float>(v + dv, u + du), z)) {
@@ -100,7 +100,7 @@ void Tracker::Impl::VoteAgainstDepth(const std::vector<Eigen::Vector3d>& points_
                                      const cv::Mat& depth_m, DepthVotes* votes) const {
   for (const Eigen::Vector3d& point_w : points_w) {
     const Eigen::Vector3d p_c = T_cw * point_w;
-    if (p_c.z() <= 0) continue;
+    if (p_c.z() <= 0 || p_c.z() > options.depth_judgement.max_depth_m) continue;
     const Eigen::Vector2d uv = camera.Project(p_c);
     const int u = static_cast<int>(std::lround(uv.x()));
     const int v = static_cast<int>(std::lround(uv.y()));

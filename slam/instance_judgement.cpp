@@ -272,7 +272,10 @@ void Tracker::Impl::ApplyMotionMemory(bool full_baseline, InstanceJudgement* jud
 
 // A moveable object that cannot be judged yet is kept out of the pose and the map
 // until it can: mapping a walking person because it was not measured is the error the
-// paper exists to avoid.
+// paper exists to avoid. Judged from depth, that is one frame a baseline after it
+// appears (most often while it is far and small, where its features weigh little), or
+// never for one beyond the sensor's depth range, where a car crossing 50 m away would
+// turn the view by a degree a frame. What it costs with nothing moving: docs/results.md.
 void Tracker::Impl::KeepOutOfPoseAndMap(const InstanceJudgement& judgement, const std::vector<int>& features) {
   const bool exclude = judgement.moving || (judgement.moveable_class && !judgement.judged);
   for (int f : features) current.excluded[static_cast<size_t>(f)] = exclude;

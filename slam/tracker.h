@@ -142,6 +142,11 @@ struct DepthJudgementOptions {
   int interior_margin_px = 2;
   // A frame measures an instance on at least this many samples that land on valid depth.
   int min_samples = 12;
+  // Samples are taken, and compared, only up to this depth: beyond, the depth noise of a
+  // still object contradicts about as many samples as a moving one's motion (a city
+  // sensor's 0.3 mm at 1 m, growing with depth squared, is 1 m at 50 m, as much as a
+  // walker moves in a second). No map point is made that far either (max_point_depth_m).
+  double max_depth_m = 40.0;
   // A frame sees the instance move when at least this share of its measured samples is
   // contradicted (the depth there lies beyond moving_distance_m + moving_distance_per_m
   // * depth): a car moving along its length vacates only its ends, and the depth noise
