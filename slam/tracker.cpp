@@ -263,7 +263,7 @@ std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& ins
       // walking across the view at arm's length). Either one seeing motion is motion, so
       // the features are asked only where depth did not see it.
       bool sparse_moving = false;
-      if (!s.DepthSeesMotion(votes, judgement)) {
+      if (options_.depth_judgement.sparse_features && !s.DepthSeesMotion(votes, judgement)) {
         InstanceJudgement sparse;
         sparse.id = id;
         sparse.moveable_class = judgement.moveable_class;

@@ -60,10 +60,14 @@ struct FrameInstances {
 struct InstanceJudgement {
   std::uint16_t id = 0;
   bool moveable_class = false;
-  bool judged = false;          // enough evidence (see TrackerOptions::min_points_to_judge)
+  bool judged = false;          // enough evidence (TrackerOptions::min_points_to_judge;
+                                // from depth: log-odds of moving not 0)
   bool moving = false;
   int num_features = 0;         // features of this instance in the frame
-  int num_points = 0;           // features with a motion measurement
+  // Measurements of its motion: features (the judgement from sparse features), or depth
+  // samples landing on valid depth in the other frame (from depth), and how many of them
+  // moved or were contradicted.
+  int num_points = 0;
   int num_moving_points = 0;
   double moving_share = 0;      // num_moving_points / num_points
 };
@@ -147,6 +151,10 @@ struct DepthJudgementOptions {
   // sensor's 0.3 mm at 1 m, growing with depth squared, is 1 m at 50 m, as much as a
   // walker moves in a second). No map point is made that far either (max_point_depth_m).
   double max_depth_m = 40.0;
+  // Also ask the instance's re-found sparse features where depth did not see it move:
+  // they see a flat face sliding within its own plane, which depth cannot. They also see
+  // still cars a few metres away move for a frame or two (docs/results.md).
+  bool sparse_features = true;
   // A frame sees the instance move when at least this share of its measured samples is
   // contradicted (the depth there lies beyond moving_distance_m + moving_distance_per_m
   // * depth): a car moving along its length vacates only its ends, and the depth noise

@@ -61,6 +61,7 @@ const OptionRegistry<TrackerOptions>& TrackerOptionRegistry() {
       WHOLE(depth_judgement.interior_margin_px, Closed(0, 20), "px", "depth judgement: mask and depth agree this far around a sample"),
       WHOLE(depth_judgement.min_samples, AtLeast(1), "", "depth judgement: measured samples a frame needs to see an instance"),
       REAL(depth_judgement.max_depth_m, Above(0), "m", "depth judgement: samples are taken and compared only up to this depth"),
+      SWITCH(depth_judgement.sparse_features, "depth judgement: also ask the sparse features where depth saw no motion"),
       REAL(depth_judgement.moving_share, OpenClosed(0, 1), "", "depth judgement: share of samples contradicted that shows motion"),
       REAL(depth_judgement.moving_log_odds, Above(0), "", "depth judgement: log-odds of moving added by a frame that sees motion"),
       REAL(depth_judgement.static_log_odds, Above(0), "", "depth judgement: log-odds taken by a frame that sees it still"),

@@ -5,8 +5,8 @@
 // approaches or crosses the view moves, a box hidden behind another is not taken for
 // moving, and one seen moving for long is kept out until seen still for long enough.
 //
-// Most tests take the sparse features' measurement away (min_points_to_judge above any
-// instance's features), so that depth alone decides.
+// Most tests take the sparse features' measurement away
+// (DepthJudgementOptions::sparse_features off), so that depth alone decides.
 #include "slam/tracker.h"
 
 #include <gtest/gtest.h>
@@ -34,10 +34,10 @@ constexpr double kFps = 30.0;
 
 PinholeCamera TestCamera() { return PinholeCamera::FromVerticalFov(640, 480, 50); }
 
-// Depth alone judges: the sparse features never have enough measured points.
+// Depth alone judges.
 TrackerOptions DepthOnly() {
   TrackerOptions options;
-  options.min_points_to_judge = 1000000;
+  options.depth_judgement.sparse_features = false;
   options.instance_margin_px = 0;
   return options;
 }
