@@ -329,7 +329,9 @@ TEST(MutualLoopTest, MutualSparseJudgesFromFeaturesAndMutualFromDepth) {
       for (const slam::InstanceJudgement& judgement : loop.ProcessFrame(frame.frame).slam.instances) {
         most = std::max(most, judgement.num_points);
         *most_features = std::max(*most_features, judgement.num_features);
-        if (mode == SlamMode::kMutualSparse) EXPECT_LE(judgement.num_points, judgement.num_features);
+        if (mode == SlamMode::kMutualSparse) {
+          EXPECT_LE(judgement.num_points, judgement.num_features);
+        }
       }
     }
     return most;
