@@ -60,7 +60,10 @@ BenchSettings BenchSettings::FromYaml(const YAML::Node& bench, const std::string
       } else if (key == "tracker") {
         AppendOptionAssignments(value, "", origin + ": bench.tracker", &settings.tracker);
       } else if (key == "static_twin") {
-        settings.static_twin = value.as<bool>();
+        if (!value.IsScalar() || !YAML::convert<bool>::decode(value, settings.static_twin)) {
+          throw Error(origin + ": bench.static_twin: expected true or false, got '" +
+                      PrintableText(value.IsScalar() ? value.Scalar() : "a list or mapping") + "'");
+        }
       } else {
         throw Error(origin + ": unknown key 'bench." + key +
                     "' (known: modes, repeats, segmenter, segmenter_strength, seed, refiner, tracker, static_twin)");

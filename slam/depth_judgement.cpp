@@ -55,9 +55,6 @@ std::map<std::uint16_t, Region> InstanceRegions(const cv::Mat& ids, int step) {
   return regions;
 }
 
-// Depth agrees with `depth` as the sparse judgement's edge test has it.
-bool SameSurface(float other, float depth) { return other > 0 && std::abs(other - depth) <= 0.05f * depth + 0.02f; }
-
 }  // namespace
 
 void Tracker::Impl::SampleInstanceDepth(const cv::Mat& ids) {
@@ -85,7 +82,7 @@ void Tracker::Impl::SampleInstanceDepth(const cv::Mat& ids) {
         if (!(z > 0) || z > o.max_depth_m) continue;
         bool interior = true;
         for (const auto& [du, dv] : {std::pair{-m, 0}, std::pair{m, 0}, std::pair{0, -m}, std::pair{0, m}}) {
-          if (ids.at<std::uint16_t>(v + dv, u + du) != id || !SameSurface(depth.at<float>(v + dv, u + du), z)) {
+          if (ids.at<std::uint16_t>(v + dv, u + du) != id || !OnSameSurface(depth.at<float>(v + dv, u + du), z)) {
             interior = false;
             break;
           }
@@ -145,7 +142,7 @@ bool Tracker::Impl::DepthSeesMotion(const DepthVotes& votes, const InstanceJudge
          double(votes.moving) >= o.moving_share * votes.measured();
 }
 
-void Tracker::Impl::DecideFromDepth(const DepthVotes& votes, bool full_baseline, bool sparse_moving,
+void Tracker::Impl::DecideFromDepth(const DepthVotes& votes, bool full_baseline, bool sees_motion,
                                     InstanceJudgement* judgement, InstanceMotionMemory* memory) const {
   const DepthJudgementOptions& o = options.depth_judgement;
   // An instance unmeasured for longer than moving_memory_s starts afresh: its track id
@@ -155,7 +152,7 @@ void Tracker::Impl::DecideFromDepth(const DepthVotes& votes, bool full_baseline,
     memory->static_frames = 0;
   }
   const bool measured = votes.measured() >= o.min_samples;
-  if (DepthSeesMotion(votes, *judgement) || sparse_moving) {
+  if (sees_motion) {
     // A still past does not outweigh a frame that sees motion: a parked car that pulls
     // out must leave the pose at once; a false alarm only keeps a still one out a while.
     memory->last_measured_stamp_s = current.stamp_s;

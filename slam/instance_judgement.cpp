@@ -44,7 +44,7 @@ bool Tracker::Impl::OnDepthEdge(size_t i) const {
     const float* row = current.depth_m.ptr<float>(y + dy);
     for (int dx = -r; dx <= r; ++dx) {
       const float d = row[x + dx];
-      if (!(d > 0) || std::abs(d - depth) > 0.05f * depth + 0.02f) return true;
+      if (!OnSameSurface(d, depth)) return true;
     }
   }
   return false;

@@ -243,7 +243,7 @@ std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& ins
   // The judgement from depth measures against the remembered frame a baseline back (or
   // the oldest there is, which can show motion but not stillness).
   const bool by_depth = s.JudgesByDepth();
-  if (by_depth) s.SampleInstanceDepth(instances.ids);
+  if (by_depth && s.coarse_ok) s.SampleInstanceDepth(instances.ids);
   const InstanceSnapshot* past =
       by_depth && !s.history.empty() && !s.history.front().depth_m.empty() ? &s.history.front() : nullptr;
   const bool depth_full_baseline =
@@ -262,8 +262,9 @@ std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& ins
       // depth cannot, a flat textured surface sliding within its own plane (a torso
       // walking across the view at arm's length). Either one seeing motion is motion, so
       // the features are asked only where depth did not see it.
+      const bool depth_moving = s.DepthSeesMotion(votes, judgement);
       bool sparse_moving = false;
-      if (options_.depth_judgement.sparse_features && !s.DepthSeesMotion(votes, judgement)) {
+      if (options_.depth_judgement.sparse_features && !depth_moving) {
         InstanceJudgement sparse;
         sparse.id = id;
         sparse.moveable_class = judgement.moveable_class;
@@ -279,7 +280,7 @@ std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& ins
         judgement.judged = true;
         judgement.moving = given_moving_ids->count(id) > 0;
       } else {
-        s.DecideFromDepth(votes, depth_full_baseline, sparse_moving, &judgement, &memory);
+        s.DecideFromDepth(votes, depth_full_baseline, depth_moving || sparse_moving, &judgement, &memory);
       }
     } else if (s.coarse_ok) {
       // Once an instance has been seen still over a full baseline, its young points serve

@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <cmath>
 #include <cstdint>
 #include <deque>
 #include <map>
@@ -110,6 +111,13 @@ class RotationHistogram {
  private:
   std::array<std::vector<int>, kBins> bins_;
 };
+
+// Whether a depth reading `other` (m, 0 = none) lies on the same surface as `depth`:
+// within 5 % plus 2 cm, what a depth edge exceeds. Both judgements use it to keep
+// silhouettes, whose depth reads either side of the edge, out of their measurements.
+inline bool OnSameSurface(float other, float depth) {
+  return other > 0 && std::abs(other - depth) <= 0.05f * depth + 0.02f;
+}
 
 // What the judgement of later frames needs to know of a past frame: its instance
 // features, their descriptors and world positions.
@@ -397,9 +405,10 @@ struct Tracker::Impl {
                                 InstanceJudgement* judgement) const;
   // Whether this frame's votes show the instance moving.
   bool DepthSeesMotion(const DepthVotes& votes, const InstanceJudgement& judgement) const;
-  // The verdict: this frame's votes (and whether the sparse features saw the instance
-  // move) added to the instance's log-odds of moving.
-  void DecideFromDepth(const DepthVotes& votes, bool full_baseline, bool sparse_moving, InstanceJudgement* judgement,
+  // The verdict: whether this frame saw the instance move (its depth or its sparse
+  // features) or, measured on enough samples over a full baseline, still, added to the
+  // instance's log-odds of moving.
+  void DecideFromDepth(const DepthVotes& votes, bool full_baseline, bool sees_motion, InstanceJudgement* judgement,
                        InstanceMotionMemory* memory) const;
   void KeepOutNearbyBackground(std::uint16_t id);
 

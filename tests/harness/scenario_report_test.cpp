@@ -177,6 +177,16 @@ TEST(ScenarioReportTest, BenchSectionIsChecked) {
   EXPECT_THROW(BenchSettings::FromYaml(YAML::Load("{repeat: 3}"), "s.yaml"), Error);
   EXPECT_THROW(BenchSettings::FromYaml(YAML::Load("{modes: [fast]}"), "s.yaml"), Error);
   EXPECT_THROW(BenchSettings::FromYaml(YAML::Load("{segmenter: magic}"), "s.yaml"), Error);
+  EXPECT_TRUE(BenchSettings::FromYaml(YAML::Load("{static_twin: true}"), "s.yaml").static_twin);
+  EXPECT_FALSE(bench.static_twin);
+  try {
+    BenchSettings::FromYaml(YAML::Load("{static_twin: maybe}"), "s.yaml");
+    ADD_FAILURE() << "static_twin: maybe was taken";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("s.yaml: bench.static_twin: expected true or false, got 'maybe'"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 // The oracle runs only where named, and on ground-truth masks whatever the segmenter.
