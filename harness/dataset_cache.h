@@ -6,12 +6,40 @@
 // prune-cache` removes the datasets this build can no longer reach.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
+#include "scenes/scenario.h"
+#include "sim/dataset_generator.h"
+
 namespace segslam::harness {
+
+// The key of a scenario's dataset: a hash of the world description (not of `expect:` or
+// `bench:`), the frame limit and the generator's code, 12 hex digits.
+std::string DatasetCacheKey(const scenes::Scenario& scenario, int frames, sim::GlBackend backend);
+
+// The lock a process that generates `dataset_dir` holds (core/owner_lock.h): a hidden file
+// beside it, ".<name>.lock".
+std::filesystem::path DatasetLockPath(const std::filesystem::path& dataset_dir);
+
+// How GenerateUnlessAnotherProcessDoes came by the dataset.
+enum class DatasetOrigin { kGenerated, kMadeByAnotherProcess };
+
+// Calls `generate` to make `dataset_dir` while holding its lock, unless another process
+// (on this host, or on another over a shared file system) holds it: then waits, printing
+// who it waits for, and returns kMadeByAnotherProcess as soon as `made_by_another()`
+// says the dataset is there (it is asked before each try, and once more after the lock
+// is taken). `key` says what is generated (DatasetCacheKey): with `refuse_other_key`, a
+// holder generating something else into the same folder is an error naming it rather
+// than waited for. The lock of an owner that died is broken (owner_lock.h).
+DatasetOrigin GenerateUnlessAnotherProcessDoes(const std::filesystem::path& dataset_dir, const std::string& key,
+                                               bool refuse_other_key, const std::function<bool()>& made_by_another,
+                                               const std::function<void()>& generate,
+                                               const std::atomic<bool>* cancel);
 
 struct CachedDataset {
   std::filesystem::path dir;

@@ -57,30 +57,6 @@ constexpr int kExitExpectationFailed = 2;
 
 using ScenarioRunArgs = ScenarioRunRequest;
 
-// FNV-1a, 64 bit: stable across builds and machines, unlike std::hash.
-std::uint64_t Fnv1a64(const std::string& bytes) {
-  std::uint64_t hash = 14695981039346656037ull;
-  for (const unsigned char c : bytes) {
-    hash ^= c;
-    hash *= 1099511628211ull;
-  }
-  return hash;
-}
-
-// The dataset depends on the world description (not on `expect:` or `bench:`), the frame
-// limit and the generator's code.
-std::string DatasetCacheKey(const scenes::Scenario& scenario, int frames, sim::GlBackend backend) {
-  scenes::Scenario world = scenario;
-  world.expect = YAML::Node();
-  world.bench = YAML::Node();
-  YAML::Emitter yaml;
-  yaml << scenes::ScenarioToYaml(world);
-  std::string key_text = fmt::format("{}\nframes={}\ncode={}\n", yaml.c_str(), frames, SEGSLAM_VERSION);
-  // A GPU's EGL may rasterise other pixels than llvmpipe; OSMesa's key stays as it was.
-  if (backend != sim::GlBackend::kOsmesa) key_text += "gl=" + sim::GlBackendName(backend) + "\n";
-  return fmt::format("{:016x}", Fnv1a64(key_text)).substr(0, 12);
-}
-
 std::string Metres(const std::optional<ErrorStatistics>& ate) {
   return ate.has_value() ? fmt::format("{:.4f} m", ate->rmse) : "n/a";
 }
@@ -324,27 +300,40 @@ void PrepareJUnitPath(const fs::path& junit_file) {
 // The scenario's dataset in `dataset`, generated once per effective scenario and code
 // version. The generator writes into a staging folder and renames it, so an existing
 // folder was complete; it is checked against its manifest.json before reuse
-// (CheckCachedDataset) and generated anew if a file has changed since. Returns whether it
-// was there already and intact.
+// (CheckCachedDataset) and generated anew if a file has changed since. Processes that
+// share the cache (sweep shards, array tasks on several nodes) generate it once: the
+// others wait for the one that holds its lock and reuse its dataset. Returns whether it
+// was there already, or made by another process, and intact.
 bool EnsureDataset(const scenes::Scenario& scenario, const fs::path& dataset, const ScenarioRunRequest& args,
                    sim::GlBackend backend, const std::atomic<bool>* cancel) {
-  bool cached = IsTwoPassDataset(dataset);
   bool damaged = false;
-  if (cached) {
+  if (IsTwoPassDataset(dataset)) {
     // A file edited, cut or deleted since generation would be read as the scenario's.
     const CachedDatasetCheck check = CheckCachedDataset(dataset, args.verify);
     if (check.problems.empty()) {
       fmt::print("dataset {} (cached; {} manifest.json in {:.1f} s)\n", dataset.string(),
                  check.hashed ? "sizes and SHA-256s match its" : "sizes match its", check.seconds);
-    } else {
-      fmt::print("dataset {} (cached) differs from its manifest.json in {} file(s), e.g. {}; generating it anew\n",
-                 dataset.string(), check.problems.size(), check.problems.front());
-      cached = false;
-      damaged = true;
+      std::fflush(stdout);
+      RecordCachedDataset(dataset, scenario.name, args.frames, SEGSLAM_VERSION);
+      return true;
     }
+    fmt::print("dataset {} (cached) differs from its manifest.json in {} file(s), e.g. {}; generating it anew\n",
+               dataset.string(), check.problems.size(), check.problems.front());
     std::fflush(stdout);
+    damaged = true;
   }
-  if (!cached) {
+  // Another process's dataset counts once it is there and intact; a damaged one found
+  // above, until its manifest is replaced.
+  const fs::path manifest = dataset / "manifest.json";
+  std::error_code time_error;
+  const fs::file_time_type damaged_manifest_time = damaged ? fs::last_write_time(manifest, time_error) : fs::file_time_type();
+  const auto made_by_another = [&] {
+    if (!IsTwoPassDataset(dataset)) return false;
+    std::error_code error;
+    if (damaged && fs::last_write_time(manifest, error) == damaged_manifest_time) return false;
+    return CheckCachedDataset(dataset).problems.empty();
+  };
+  const auto generate = [&] {
     sim::GenerateOptions generate_options;
     generate_options.backend = backend;
     generate_options.max_frames_per_pass = args.frames;
@@ -352,9 +341,9 @@ bool EnsureDataset(const scenes::Scenario& scenario, const fs::path& dataset, co
     // Replaces a dataset there (one that failed its check); a folder that is no dataset
     // is refused (core/output_folders.h).
     generate_options.overwrite = true;
-    // One another shard finished meanwhile is kept; not the damaged one just found.
+    // One another process finished meanwhile (its lock broken as stale) is kept; not the
+    // damaged one just found.
     generate_options.keep_complete_dataset = !damaged;
-    fs::create_directories(dataset.parent_path());
     ProgressBar bar(args.progress_prefix + "generate " + scenario.name);
     const sim::GenerateSummary summary =
         sim::GenerateDataset(scenario, dataset, generate_options, [&](const sim::GenerationProgress& p) {
@@ -363,11 +352,18 @@ bool EnsureDataset(const scenes::Scenario& scenario, const fs::path& dataset, co
     if (!args.quiet) bar.Finish();
     fmt::print("dataset {}: generated {} frames in {:.1f} s{}\n", dataset.string(), summary.frames, summary.seconds,
                summary.kept_existing ? " (another process finished it first: that one is kept)" : "");
+  };
+  const std::string key = dataset.filename().string();
+  const DatasetOrigin origin = GenerateUnlessAnotherProcessDoes(dataset, key, false, made_by_another, generate, cancel);
+  if (origin == DatasetOrigin::kMadeByAnotherProcess) {
+    fmt::print("dataset {} (generated by another process meanwhile; its files match its manifest.json): reused\n",
+               dataset.string());
+    std::fflush(stdout);
   }
   // Written on every use: its key names this build, so a dataset from before records
   // were kept gets one too.
   RecordCachedDataset(dataset, scenario.name, args.frames, SEGSLAM_VERSION);
-  return cached;
+  return origin == DatasetOrigin::kMadeByAnotherProcess;
 }
 
 // Every run, in report order: each mode `repeats` times, a deterministic mode once.
