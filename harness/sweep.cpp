@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <limits>
 #include <map>
@@ -275,7 +277,43 @@ SweepGrid SweepGrid::FromJson(const nlohmann::json& json, const std::string& ori
   return grid;
 }
 
+Shard Shard::FromSlurmArray(const std::function<const char*(const char*)>& variable) {
+  const auto number = [&](const char* name, std::optional<long long> fallback) -> long long {
+    const char* text = variable(name);
+    if (text == nullptr || *text == '\0') {
+      if (fallback) return *fallback;
+      throw Error(std::string("sweep --shard slurm: ") + name +
+                  " is not set; submit the sweep as a Slurm job array (sbatch --array=1-N, or the script "
+                  "`segslam sweep ... --emit-sbatch DIR` writes)");
+    }
+    try {
+      std::size_t used = 0;
+      const long long value = std::stoll(text, &used);
+      if (used != std::strlen(text)) throw std::invalid_argument(text);
+      return value;
+    } catch (const std::exception&) {
+      throw Error(std::string("sweep --shard slurm: ") + name + "=" + text + " is not a whole number");
+    }
+  };
+  const long long id = number("SLURM_ARRAY_TASK_ID", std::nullopt);
+  const long long count = number("SLURM_ARRAY_TASK_COUNT", std::nullopt);
+  const long long first = number("SLURM_ARRAY_TASK_MIN", 0LL);
+  const long long step = number("SLURM_ARRAY_TASK_STEP", 1LL);
+  const long long offset = id - first;
+  if (count < 1 || count > std::numeric_limits<int>::max() || step < 1 || offset < 0 || offset % step != 0 ||
+      offset / step >= count) {
+    throw Error(fmt::format("sweep --shard slurm: task {} is not one of {} tasks from {} in steps of {}; give the "
+                            "array as a range (--array=1-N or FIRST-LAST:STEP), not a list",
+                            id, count, first, step));
+  }
+  Shard shard;
+  shard.index = static_cast<int>(offset / step) + 1;
+  shard.count = static_cast<int>(count);
+  return shard;
+}
+
 Shard Shard::Parse(const std::string& text) {
+  if (text == "slurm") return FromSlurmArray([](const char* name) { return std::getenv(name); });
   Shard shard;
   const std::size_t slash = text.find('/');
   try {

@@ -11,6 +11,7 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -86,7 +87,14 @@ struct SweepFile {
 struct Shard {
   int index = 1;
   int count = 1;
+  // "I/N", or "slurm": the task's place in its Slurm job array (FromSlurmArray, from this
+  // process's environment). Throws segslam::Error naming what is wrong.
   static Shard Parse(const std::string& text);
+  // Task SLURM_ARRAY_TASK_ID of an array of SLURM_ARRAY_TASK_COUNT tasks, numbered from
+  // SLURM_ARRAY_TASK_MIN in steps of SLURM_ARRAY_TASK_STEP (sbatch --array=0-9, 1-10 and
+  // 1-19:2 all work; a list such as 1,4,9 does not, and is refused). `variable` looks
+  // one up (nullptr: not set).
+  static Shard FromSlurmArray(const std::function<const char*(const char*)>& variable);
   bool Owns(int point) const { return point % count + 1 == index; }
 };
 

@@ -1,8 +1,11 @@
 // `segslam sweep SCENARIO --set key=v1,v2,...` or `segslam sweep SWEEP_FILE`: a scenario
 // run per grid point (harness/sweep.h), then the merged table and plots; `segslam sweep
 // merge` joins the folders of a sweep split with --shard.
+#include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <iterator>
 #include <memory>
@@ -33,6 +36,9 @@ struct SweepArgs {
   std::vector<std::string> set_options;
   std::string out_dir;
   std::string shard = "1/1";
+  std::string emit_sbatch_dir;             // write Slurm scripts there instead of running
+  std::vector<std::string> sbatch_options;  // e.g. --partition=cpu, one #SBATCH line each
+  int array_tasks = 0;                      // 0 = one task per point
 };
 
 struct SweepMergeArgs {
@@ -137,6 +143,83 @@ void RunPoint(const ScenarioRunRequest& run, const SweepGrid& grid, int p, const
   std::fflush(stdout);
 }
 
+// The argument as one word for bash: as it is when it has no special characters, else
+// single-quoted.
+std::string ShellWord(const std::string& text) {
+  const bool plain = !text.empty() && std::all_of(text.begin(), text.end(), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || std::strchr("_./=,:+-@%", c) != nullptr;
+  });
+  if (plain) return text;
+  std::string quoted = "'";
+  for (const char c : text) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return quoted + "'";
+}
+
+std::string ShellLine(const std::vector<std::string>& words) {
+  std::string line;
+  for (const std::string& word : words) line += (line.empty() ? "" : " ") + ShellWord(word);
+  return line;
+}
+
+// Writes DIR/sweep_array.sbatch (the sweep as a job array, each task a shard: --shard
+// slurm), DIR/sweep_merge.sbatch (the merge, after every task succeeded) and DIR/submit.sh,
+// which submits both. Paths are made absolute: the jobs start elsewhere, on other nodes.
+void EmitSbatch(const SweepArgs& args, const fs::path& out_dir, int points, const std::string& name) {
+  const fs::path dir = fs::absolute(args.emit_sbatch_dir);
+  fs::create_directories(dir / "logs");
+  const fs::path binary = fs::read_symlink("/proc/self/exe");
+  const int tasks = args.array_tasks > 0 ? std::min(args.array_tasks, points) : points;
+
+  std::vector<std::string> sweep = {binary.string(), "sweep", fs::absolute(args.file).string()};
+  for (const std::string& set : args.set_options) sweep.insert(sweep.end(), {"--set", set});
+  sweep.insert(sweep.end(), {"--out", fs::absolute(out_dir).string(), "--cache", fs::absolute(args.run.cache_dir).string(),
+                             "--jobs", std::to_string(args.run.jobs), "--gl", args.run.gl});
+  if (args.run.repeats > 0) sweep.insert(sweep.end(), {"--repeats", std::to_string(args.run.repeats)});
+  if (!args.run.modes.empty()) sweep.insert(sweep.end(), {"--modes", args.run.modes});
+  if (!args.run.segmenter.empty()) sweep.insert(sweep.end(), {"--segmenter", args.run.segmenter});
+  if (args.run.frames > 0) sweep.insert(sweep.end(), {"--frames", std::to_string(args.run.frames)});
+  const std::vector<std::string> merge = {binary.string(), "sweep", "merge", fs::absolute(out_dir).string()};
+
+  const auto header = [&](const std::string& job, const std::string& log) {
+    std::string text = "#!/bin/bash\n";
+    text += "#SBATCH --job-name=" + ShellWord("segslam-" + name + "-" + job) + "\n";
+    text += "#SBATCH --output=" + ShellWord((dir / "logs" / log).string()) + "\n";
+    for (const std::string& option : args.sbatch_options) text += "#SBATCH " + option + "\n";
+    return text;
+  };
+  std::string array = header("array", "array_%A_%a.out");
+  array += fmt::format("#SBATCH --array=1-{}\n#SBATCH --cpus-per-task={}\n", tasks, args.run.jobs);
+  array += fmt::format(
+      "# Written by `segslam sweep --emit-sbatch`: task k of this array runs shard k/{} of the sweep's {} points\n"
+      "# (point p belongs to shard p % {} + 1); datasets two tasks need are generated once in the shared\n"
+      "# --cache, the others waiting for it. Submit with submit.sh, which queues the merge after it.\n"
+      "set -euo pipefail\ncd {}\nexec {} --shard slurm -q\n",
+      tasks, points, tasks, ShellWord(fs::current_path().string()), ShellLine(sweep));
+  std::string merge_job = header("merge", "merge_%j.out");
+  merge_job += fmt::format(
+      "# Written by `segslam sweep --emit-sbatch`: joins the array's points into one report.\n"
+      "set -euo pipefail\ncd {}\nexec {}\n",
+      ShellWord(fs::current_path().string()), ShellLine(merge));
+  const std::string submit =
+      "#!/bin/bash\n"
+      "# Submits the sweep's job array, and its merge to run when every task has succeeded.\n"
+      "set -euo pipefail\n"
+      "here=$(cd \"$(dirname \"$0\")\" && pwd)\n"
+      "array=$(sbatch --parsable \"$here/sweep_array.sbatch\")\n"
+      "array=${array%%;*}  # --parsable prints JOBID;CLUSTER on a federation\n"
+      "merge=$(sbatch --parsable --dependency=afterok:\"$array\" --kill-on-invalid-dep=yes \"$here/sweep_merge.sbatch\")\n"
+      "merge=${merge%%;*}\n"
+      "echo \"array job $array, merge job $merge\"\n";
+  WriteFileAtomically(dir / "sweep_array.sbatch", array);
+  WriteFileAtomically(dir / "sweep_merge.sbatch", merge_job);
+  WriteFileAtomically(dir / "submit.sh", submit);
+  fs::permissions(dir / "submit.sh", fs::perms::owner_exec | fs::perms::group_exec | fs::perms::others_exec,
+                  fs::perm_options::add);
+  fmt::print("sweep: {} points as a Slurm array of {} task(s) and a merge job: {}\nsubmit with: bash {}\n"
+             "the merged report will be in {}\n",
+             points, tasks, dir.string(), (dir / "submit.sh").string(), (fs::absolute(out_dir) / "report.html").string());
+}
+
 int RunSweep(const SweepArgs& args) {
   const auto start = std::chrono::steady_clock::now();
   // A sweep file brings its scenario and grid; --set lays over them.
@@ -146,7 +229,10 @@ int RunSweep(const SweepArgs& args) {
   run.scenario_file = sweep_file_spec ? sweep_file_spec->scenario.string() : args.file;
   const SweepGrid grid = sweep_file_spec ? sweep_file_spec->grid.WithSetOptions(args.set_options)
                                          : SweepGrid::FromSetOptions(args.set_options);
-  const Shard shard = Shard::Parse(args.shard);
+  if (!args.emit_sbatch_dir.empty() && args.shard != "1/1") {
+    throw Error("sweep: --emit-sbatch writes a job array whose tasks take their shards from Slurm; leave --shard out");
+  }
+  const Shard shard = args.emit_sbatch_dir.empty() ? Shard::Parse(args.shard) : Shard{};
   const scenes::Scenario base = scenes::LoadScenario(run.scenario_file);
   CheckEveryPoint(base, grid, run, sweep_file_spec ? args.file : std::string());
 
@@ -170,6 +256,10 @@ int RunSweep(const SweepArgs& args) {
   ClaimSweepFolder(out_dir, sweep);
 
   const int points = grid.PointCount();
+  if (!args.emit_sbatch_dir.empty()) {
+    EmitSbatch(args, out_dir, points, default_name);
+    return 0;
+  }
   int mine = 0;
   for (int p = 0; p < points; ++p) mine += shard.Owns(p) ? 1 : 0;
   fmt::print("segslam sweep: {} points ({}), shard {}/{} runs {} of them, into {}\n", points,
@@ -218,8 +308,17 @@ void AddSweepCommand(CLI::App& app, std::function<int()>* action) {
                     "KEY=V1,V2,... sweeps KEY over the values; KEY=VALUE fixes it (repeatable; several lists make a "
                     "grid)");
   sweep->add_option("--out,-o", args->out_dir, "Sweep folder (default reports/<scenario name>-sweep)");
-  sweep->add_option("--shard", args->shard, "Run only shard I of N (I/N): point p belongs to shard p % N + 1")
+  sweep->add_option("--shard", args->shard,
+                    "Run only shard I of N (I/N): point p belongs to shard p % N + 1; 'slurm': this Slurm array "
+                    "task's shard (SLURM_ARRAY_TASK_ID of SLURM_ARRAY_TASK_COUNT)")
       ->capture_default_str();
+  sweep->add_option("--emit-sbatch", args->emit_sbatch_dir,
+                    "Write Slurm scripts into this folder instead of running: the sweep as a job array (one task per "
+                    "point, or --array-tasks), a merge job after it, and submit.sh to queue both");
+  sweep->add_option("--sbatch", args->sbatch_options,
+                    "An sbatch option for the emitted jobs, e.g. --sbatch=--partition=cpu (repeatable)");
+  sweep->add_option("--array-tasks", args->array_tasks, "Tasks of the emitted array (default: one per point)")
+      ->check(WholeNumberIn(1, 100000));
   sweep->add_option("--repeats", args->run.repeats, "Runs per mode and point (default: the scenario's bench.repeats)")
       ->check(WholeNumberIn(1, kMaxRepeats));
   sweep->add_option("--modes", args->run.modes, "Comma-separated modes (default: the scenario's bench.modes)");

@@ -13,6 +13,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   clang-14 libclang-rt-14-dev llvm-14  # fuzz targets: clang, libFuzzer, llvm-symbolizer (docs/testing.md)
   chromium  # the HTML report is checked in a headless browser (scripts/check_report.sh)
+  slurm-wlm munge  # sweeps as Slurm job arrays, tested on a private single-node Slurm (scripts/slurm/)
 )
 
 missing=()
