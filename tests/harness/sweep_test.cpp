@@ -8,6 +8,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <set>
 #include <string>
 
@@ -210,6 +211,53 @@ TEST(SweepShardTest, ShardsCoverEveryPointExactlyOnce) {
     }
   }
   for (const char* bad : {"0/2", "3/2", "1/0", "1-2", "a/b", "1/2x"}) EXPECT_THROW(Shard::Parse(bad), Error) << bad;
+}
+
+// Slurm numbers an array's tasks as --array says (0-9, 1-10, 1-19:2): each gives shards
+// 1..N, every one once.
+TEST(SweepShardTest, SlurmArrayTasksAreTheShards) {
+  const auto shard_of = [](std::map<std::string, std::string> variables) {
+    return Shard::FromSlurmArray([variables](const char* name) -> const char* {
+      const auto it = variables.find(name);
+      return it == variables.end() ? nullptr : it->second.c_str();
+    });
+  };
+  struct Array {
+    int first, step, count;
+  };
+  for (const Array array : {Array{0, 1, 4}, Array{1, 1, 4}, Array{1, 2, 4}, Array{7, 3, 2}}) {
+    std::set<int> indices;
+    for (int k = 0; k < array.count; ++k) {
+      const Shard shard = shard_of({{"SLURM_ARRAY_TASK_ID", std::to_string(array.first + k * array.step)},
+                                    {"SLURM_ARRAY_TASK_MIN", std::to_string(array.first)},
+                                    {"SLURM_ARRAY_TASK_STEP", std::to_string(array.step)},
+                                    {"SLURM_ARRAY_TASK_COUNT", std::to_string(array.count)}});
+      EXPECT_EQ(shard.count, array.count);
+      indices.insert(shard.index);
+    }
+    EXPECT_EQ(indices.size(), static_cast<std::size_t>(array.count));
+    EXPECT_EQ(*indices.begin(), 1);
+    EXPECT_EQ(*indices.rbegin(), array.count);
+  }
+  // Without MIN and STEP (older Slurm): numbered from 0 in steps of 1.
+  EXPECT_EQ(shard_of({{"SLURM_ARRAY_TASK_ID", "2"}, {"SLURM_ARRAY_TASK_COUNT", "3"}}).index, 3);
+  // Not an array task, a list such as --array=1,4,9, or garbage: refused, naming what.
+  const auto refusal = [&](std::map<std::string, std::string> variables) {
+    try {
+      shard_of(std::move(variables));
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(refusal({}).find("SLURM_ARRAY_TASK_ID is not set; submit the sweep as a Slurm job array"),
+            std::string::npos);
+  EXPECT_NE(refusal({{"SLURM_ARRAY_TASK_ID", "9"}, {"SLURM_ARRAY_TASK_MIN", "1"}, {"SLURM_ARRAY_TASK_COUNT", "3"}})
+                .find("task 9 is not one of 3 tasks from 1 in steps of 1"),
+            std::string::npos);
+  EXPECT_NE(refusal({{"SLURM_ARRAY_TASK_ID", "x1"}, {"SLURM_ARRAY_TASK_COUNT", "3"}}).find("SLURM_ARRAY_TASK_ID=x1 is "
+                                                                                         "not a whole number"),
+            std::string::npos);
 }
 
 class SweepCliTest : public segslam::testing::CliScratchTest {
