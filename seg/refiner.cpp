@@ -1,6 +1,7 @@
 #include "seg/refiner.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -33,6 +34,43 @@ class RegionStatsAccumulator {
     std::int64_t sum_x = 0;
     for (int x = x_begin; x < x_end; ++x) {
       if (!inside(row[x])) continue;
+      if (first < 0) first = x;
+      last = x;
+      ++count;
+      sum_x += x;
+    }
+    if (count > 0) AddRowSpan(y, first, last, count, sum_x);
+  }
+
+  // AddRow for a CV_8U mask row (non-zero = inside), eight pixels at a time where they
+  // are all outside or all inside.
+  void AddMaskRow(int y, const std::uint8_t* row, int x_begin, int x_end) {
+    constexpr std::uint64_t kOnes = 0x0101010101010101ull, kHighs = 0x8080808080808080ull;
+    int count = 0, first = -1, last = -1;
+    std::int64_t sum_x = 0;
+    int x = x_begin;
+    for (; x + 8 <= x_end; x += 8) {
+      std::uint64_t word;
+      std::memcpy(&word, row + x, 8);
+      if (word == 0) continue;
+      const bool has_zero_byte = ((word - kOnes) & ~word & kHighs) != 0;
+      if (!has_zero_byte) {
+        if (first < 0) first = x;
+        last = x + 7;
+        count += 8;
+        sum_x += 8 * static_cast<std::int64_t>(x) + 28;
+        continue;
+      }
+      for (int k = x; k < x + 8; ++k) {
+        if (row[k] == 0) continue;
+        if (first < 0) first = k;
+        last = k;
+        ++count;
+        sum_x += k;
+      }
+    }
+    for (; x < x_end; ++x) {
+      if (row[x] == 0) continue;
       if (first < 0) first = x;
       last = x;
       ++count;
@@ -91,7 +129,7 @@ RegionStats Measure(const cv::Mat& mask) {
       if (word != 0) break;
       end -= 8;
     }
-    region.AddRow(y, row, x, end, [](std::uint8_t value) { return value != 0; });
+    region.AddMaskRow(y, row, x, end);
   }
   return region.Result();
 }
@@ -104,11 +142,6 @@ void CheckInputImage(const cv::Mat& image, int type, const PinholeCamera& camera
                 std::to_string(camera.width) + "x" + std::to_string(camera.height));
   }
 }
-
-// One projected point: target position, depth and footprint half-extents.
-struct Splat {
-  float u, v, z, hx, hy;
-};
 
 }  // namespace
 
@@ -129,8 +162,8 @@ struct ProjectionWorkspace {
   std::vector<cv::Rect> touched;
   // Per previous region: projected at the far limit (it had no depth at all).
   std::vector<bool> at_far_limit;
-  std::vector<Splat> splats;
-  std::vector<float> depths;
+  std::vector<float> depths;         // a region's measured depths, for its median
+  std::vector<cv::Point> missing;    // a region's pixels without depth
 };
 
 namespace {
@@ -155,18 +188,6 @@ void ResetWorkspace(int width, int height, size_t regions, ProjectionWorkspace* 
 
 bool HasDepth(float z) { return z > 0 && std::isfinite(z); }
 
-// Whether any pixel of the region (inside bbox) has a measured depth.
-bool RegionHasDepth(const cv::Mat& mask, const cv::Rect& bbox, const cv::Mat& depth_m) {
-  for (int v = bbox.y; v < bbox.br().y; ++v) {
-    const std::uint8_t* m = mask.ptr<std::uint8_t>(v);
-    const float* d = depth_m.ptr<float>(v);
-    for (int u = bbox.x; u < bbox.br().x; ++u) {
-      if (m[u] && HasDepth(d[u])) return true;
-    }
-  }
-  return false;
-}
-
 // The largest measured depth of a depth image (the sensor's far limit, near enough),
 // 0 when it measures nothing.
 float FarthestDepth(const cv::Mat& depth_m) {
@@ -180,29 +201,11 @@ float FarthestDepth(const cv::Mat& depth_m) {
   return farthest;
 }
 
-// The depth given to a region's pixels that have none: the median of its measured
-// pixels; 0 (such pixels are not projected) when none is missing or, for a region
-// measured nowhere, when the fill option is off.
-float MissingDepthFill(const cv::Mat& mask, const cv::Rect& bbox, const cv::Mat& depth_m,
-                       std::vector<float>* scratch) {
-  scratch->clear();
-  bool any_missing = false;
-  for (int v = bbox.y; v < bbox.br().y; ++v) {
-    const std::uint8_t* m = mask.ptr<std::uint8_t>(v);
-    const float* d = depth_m.ptr<float>(v);
-    for (int u = bbox.x; u < bbox.br().x; ++u) {
-      if (!m[u]) continue;
-      if (HasDepth(d[u])) {
-        scratch->push_back(d[u]);
-      } else {
-        any_missing = true;
-      }
-    }
-  }
-  if (!any_missing || scratch->empty()) return 0;
-  auto mid = scratch->begin() + scratch->size() / 2;
-  std::nth_element(scratch->begin(), mid, scratch->end());
-  return *mid;
+// static_cast<int>(std::ceil(value)) for a value well inside int's range, in a few
+// instructions: without SSE4.1, std::ceil on a float is a dozen.
+int CeilToInt(float value) {
+  const int truncated = static_cast<int>(value);  // towards zero: the ceiling of a negative value
+  return truncated + (static_cast<float>(truncated) < value ? 1 : 0);
 }
 
 // Normalised image coordinates of each column (x) and row (y): the ray of pixel (u, v)
@@ -215,82 +218,176 @@ struct PixelRays {
   std::vector<double> x, y;
 };
 
-// Moves each pixel of a region (inside bbox) by T into the current view, X' = z R ray + t,
-// and gives it the footprint of its source pixel there.
-void ProjectRegionPixels(const RefinerOptions& options, const PinholeCamera& camera,
-                         const PixelRays& rays, const cv::Mat& mask, const cv::Rect& bbox,
-                         const cv::Mat& depth_m, float fill_depth, const Eigen::Isometry3d& T,
-                         std::vector<Splat>* splats) {
-  const int W = camera.width, H = camera.height;
-  const double fx = camera.fx, fy = camera.fy, cx = camera.cx, cy = camera.cy;
-  const double footprint = options.splat_footprint_scale;
-  const Eigen::Matrix3d R = T.linear();
-  const Eigen::Vector3d t = T.translation();
-  splats->clear();
-  for (int v = bbox.y; v < bbox.br().y; ++v) {
-    const std::uint8_t* m = mask.ptr<std::uint8_t>(v);
-    const float* d = depth_m.ptr<float>(v);
-    const Eigen::Vector3d row_base = R.col(1) * rays.y[v] + R.col(2);
-    for (int u = bbox.x; u < bbox.br().x; ++u) {
-      if (!m[u]) continue;
-      float z = d[u];
-      if (!HasDepth(z)) {
-        if (fill_depth <= 0) continue;
-        z = fill_depth;
-      }
-      const Eigen::Vector3d ray = R.col(0) * rays.x[u] + row_base;
-      const Eigen::Vector3d X = static_cast<double>(z) * ray + t;
-      if (X.z() < options.min_depth_m) continue;
-      const double inv_z = 1.0 / X.z();
-      const double xp = X.x() * inv_z, yp = X.y() * inv_z;
-      const double up = fx * xp + cx, vp = fy * yp + cy;
-      if (up < -1.5 || vp < -1.5 || up > W + 0.5 || vp > H + 0.5) continue;
-      // Local warp Jacobian for a surface fronto-parallel to the previous camera;
-      // the footprint is the axis-aligned box of the source pixel's image.
-      const double s = z * inv_z;
-      const double j00 = s * (R(0, 0) - xp * R(2, 0));
-      const double j01 = s * (fx / fy) * (R(0, 1) - xp * R(2, 1));
-      const double j10 = s * (fy / fx) * (R(1, 0) - yp * R(2, 0));
-      const double j11 = s * (R(1, 1) - yp * R(2, 1));
-      const double hx = 0.5 * footprint * (std::abs(j00) + std::abs(j01));
-      const double hy = 0.5 * footprint * (std::abs(j10) + std::abs(j11));
-      splats->push_back({static_cast<float>(up), static_cast<float>(vp),
-                         static_cast<float>(X.z()), static_cast<float>(hx),
-                         static_cast<float>(hy)});
+// Splats one region into the z-buffer under its label. Each pixel is moved by T into the
+// current view, X' = z R ray + t, and written over the pixel centres its source pixel's
+// footprint covers there, nearest first. Pixels without depth take the region's median
+// depth; a region with no depth at all, the far limit (RefinerOptions). Within a region
+// every write has the same label and the z-buffer keeps the nearest, so the order of the
+// writes does not matter: pixels with depth are splatted in the one scan that also
+// gathers the median, the others after it.
+class RegionSplatter {
+ public:
+  RegionSplatter(const RefinerOptions& options, const PinholeCamera& camera, const PixelRays& rays,
+                 const Eigen::Isometry3d& T, ProjectionWorkspace* ws)
+      : options_(options),
+        rays_(rays),
+        fx_(camera.fx),
+        fy_(camera.fy),
+        cx_(camera.cx),
+        cy_(camera.cy),
+        fx_over_fy_(camera.fx / camera.fy),
+        fy_over_fx_(camera.fy / camera.fx),
+        u_limit_(camera.width + 0.5),
+        v_limit_(camera.height + 0.5),
+        half_footprint_(0.5 * options.splat_footprint_scale),
+        min_depth_m_(options.min_depth_m),
+        width_(camera.width),
+        height_(camera.height),
+        ws_(ws),
+        zbuf_data_(ws->zbuf.data),
+        label_data_(ws->label.data),
+        zbuf_step_(ws->zbuf.step[0]),
+        label_step_(ws->label.step[0]) {
+    for (int i = 0; i < 3; ++i) {
+      t_[i] = T.translation()(i);
+      for (int j = 0; j < 3; ++j) r_[3 * i + j] = T.linear()(i, j);
     }
   }
-}
 
-// Writes the splats into the z-buffer under `id`, nearest first (ties to the later
-// write), each over the pixel centres in [u - hx, u + hx) x [v - hy, v + hy). Returns the box of pixels they cover
-// (empty when none lands in the image).
-cv::Rect SplatIntoZBuffer(const std::vector<Splat>& splats, std::uint16_t id, cv::Mat* zbuf,
-                          cv::Mat* label) {
-  const int W = zbuf->cols, H = zbuf->rows;
-  int bx0 = W, by0 = H, bx1 = -1, by1 = -1;
-  for (const Splat& p : splats) {
-    const int x0 = std::max(0, static_cast<int>(std::ceil(p.u - p.hx)));
-    const int x1 = std::min(W - 1, static_cast<int>(std::ceil(p.u + p.hx)) - 1);
-    const int y0 = std::max(0, static_cast<int>(std::ceil(p.v - p.hy)));
-    const int y1 = std::min(H - 1, static_cast<int>(std::ceil(p.v + p.hy)) - 1);
-    if (x0 > x1 || y0 > y1) continue;
-    bx0 = std::min(bx0, x0);
-    bx1 = std::max(bx1, x1);
-    by0 = std::min(by0, y0);
-    by1 = std::max(by1, y1);
+  // Splats the region (inside bbox) under `id`; `far_limit` gives the depth for a region
+  // measured nowhere. Returns the box of pixels written (empty when none) and sets
+  // *at_far_limit when the far limit was used.
+  template <typename FarLimit>
+  cv::Rect Splat(const cv::Mat& mask, const cv::Rect& bbox, const cv::Mat& depth_m, std::uint16_t id,
+                 FarLimit far_limit, bool* at_far_limit) {
+    id_ = id;
+    box_x0_ = ws_->zbuf.cols, box_y0_ = ws_->zbuf.rows, box_x1_ = -1, box_y1_ = -1;
+    std::vector<float>& depths = ws_->depths;
+    std::vector<cv::Point>& missing = ws_->missing;
+    depths.clear();
+    missing.clear();
+    const bool want_median = options_.fill_missing_depth_with_median;
+    int measured = 0;  // pixels with depth
+    for (int v = bbox.y; v < bbox.br().y; ++v) {
+      const std::uint8_t* m = mask.ptr<std::uint8_t>(v);
+      const float* d = depth_m.ptr<float>(v);
+      const std::array<double, 3> row_base = RowBase(v);
+      for (int u = bbox.x; u < bbox.br().x; ++u) {
+        if (!m[u]) continue;
+        const float z = d[u];
+        if (!HasDepth(z)) {
+          missing.emplace_back(u, v);
+          continue;
+        }
+        ++measured;
+        if (want_median) depths.push_back(z);
+        SplatPixel(u, row_base, z);
+      }
+    }
+    if (missing.empty()) return Box();
+    float fill_depth = 0;
+    if (want_median && !depths.empty()) {
+      auto mid = depths.begin() + depths.size() / 2;
+      std::nth_element(depths.begin(), mid, depths.end());
+      fill_depth = *mid;
+    }
+    const bool measured_nowhere = measured == 0;
+    if (fill_depth <= 0 && options_.project_depthless_regions_at_far_limit && measured_nowhere) {
+      fill_depth = far_limit();
+      *at_far_limit = true;
+    }
+    if (fill_depth <= 0) return Box();
+    std::array<double, 3> row_base{};
+    int row = -1;
+    for (const cv::Point& pixel : missing) {
+      if (pixel.y != row) row_base = RowBase(row = pixel.y);
+      SplatPixel(pixel.x, row_base, fill_depth);
+    }
+    return Box();
+  }
+
+ private:
+  // Inlined into the scans: its constants stay in registers across pixels. Plain
+  // scalars, in the order of the expressions of the projection (X = z R ray + t, then
+  // the footprint), so the results are those of the vector form to the last bit.
+  inline __attribute__((always_inline)) void SplatPixel(int u, const std::array<double, 3>& row_base, float z) {
+    const double ray_x = rays_.x[u];
+    const double dz = static_cast<double>(z);
+    const double X0 = dz * (r_[0] * ray_x + row_base[0]) + t_[0];
+    const double X1 = dz * (r_[3] * ray_x + row_base[1]) + t_[1];
+    const double X2 = dz * (r_[6] * ray_x + row_base[2]) + t_[2];
+    if (X2 < min_depth_m_) return;
+    const double inv_z = 1.0 / X2;
+    const double xp = X0 * inv_z, yp = X1 * inv_z;
+    const double up = fx_ * xp + cx_, vp = fy_ * yp + cy_;
+    if (up < -1.5 || vp < -1.5 || up > u_limit_ || vp > v_limit_) return;
+    // Local warp Jacobian for a surface fronto-parallel to the previous camera; the
+    // footprint is the axis-aligned box of the source pixel's image.
+    const double s = dz * inv_z;
+    const double j00 = s * (r_[0] - xp * r_[6]);
+    const double j01 = s * fx_over_fy_ * (r_[1] - xp * r_[7]);
+    const double j10 = s * fy_over_fx_ * (r_[3] - yp * r_[6]);
+    const double j11 = s * (r_[4] - yp * r_[7]);
+    const float pu = static_cast<float>(up), pv = static_cast<float>(vp), pz = static_cast<float>(X2);
+    const float hx = static_cast<float>(half_footprint_ * (std::abs(j00) + std::abs(j01)));
+    const float hy = static_cast<float>(half_footprint_ * (std::abs(j10) + std::abs(j11)));
+    // Over the pixel centres in [u - hx, u + hx) x [v - hy, v + hy).
+    const int x0 = std::max(0, CeilToInt(pu - hx));
+    const int x1 = std::min(width_ - 1, CeilToInt(pu + hx) - 1);
+    const int y0 = std::max(0, CeilToInt(pv - hy));
+    const int y1 = std::min(height_ - 1, CeilToInt(pv + hy) - 1);
+    if (x0 > x1 || y0 > y1) return;
+    box_x0_ = std::min(box_x0_, x0);
+    box_x1_ = std::max(box_x1_, x1);
+    box_y0_ = std::min(box_y0_, y0);
+    box_y1_ = std::max(box_y1_, y1);
     for (int y = y0; y <= y1; ++y) {
-      float* zr = zbuf->ptr<float>(y);
-      std::uint16_t* lr = label->ptr<std::uint16_t>(y);
+      float* zr = reinterpret_cast<float*>(zbuf_data_ + y * zbuf_step_);
+      std::uint16_t* lr = reinterpret_cast<std::uint16_t*>(label_data_ + y * label_step_);
       for (int x = x0; x <= x1; ++x) {
-        if (p.z <= zr[x]) {
-          zr[x] = p.z;
-          lr[x] = id;
+        if (pz <= zr[x]) {
+          zr[x] = pz;
+          lr[x] = id_;
         }
       }
     }
   }
-  if (bx1 < 0) return cv::Rect();
-  return cv::Rect(bx0, by0, bx1 - bx0 + 1, by1 - by0 + 1);
+
+  // R's second and third columns for row v: R (x, y_v, 1) = x R.col(0) + this.
+  std::array<double, 3> RowBase(int v) const {
+    const double ray_y = rays_.y[v];
+    return {r_[1] * ray_y + r_[2], r_[4] * ray_y + r_[5], r_[7] * ray_y + r_[8]};
+  }
+
+  cv::Rect Box() const {
+    if (box_x1_ < 0) return cv::Rect();
+    return cv::Rect(box_x0_, box_y0_, box_x1_ - box_x0_ + 1, box_y1_ - box_y0_ + 1);
+  }
+
+  const RefinerOptions& options_;
+  const PixelRays& rays_;
+  double r_[9];  // R, row-major
+  double t_[3];
+  const double fx_, fy_, cx_, cy_, fx_over_fy_, fy_over_fx_;
+  const double u_limit_, v_limit_;  // a projection beyond these lands outside the image
+  const double half_footprint_, min_depth_m_;
+  const int width_, height_;
+  ProjectionWorkspace* ws_;
+  std::uint8_t* zbuf_data_;
+  std::uint8_t* label_data_;
+  const std::size_t zbuf_step_, label_step_;
+  std::uint16_t id_ = 0;
+  int box_x0_ = 0, box_y0_ = 0, box_x1_ = -1, box_y1_ = -1;
+};
+
+// Whether each of the four labels at `row` equals the label left of it and the one
+// above it (`above`, the same columns of the row above).
+bool SameAsLeftAndAbove(const std::uint16_t* row, const std::uint16_t* above) {
+  std::uint64_t here, left, up;
+  std::memcpy(&here, row, 8);
+  std::memcpy(&left, row - 1, 8);
+  std::memcpy(&up, above, 8);
+  return ((here ^ left) | (here ^ up)) == 0;
 }
 
 // Depth-aware closing inside `area`: a pixel that is empty, or shows something farther
@@ -310,6 +407,11 @@ void CloseCracks(const RefinerOptions& options, const cv::Rect& area, cv::Mat* z
       const float* zu = zbuf->ptr<float>(y - 1);
       const float* zd = zbuf->ptr<float>(y + 1);
       for (int x = inner.x; x < inner.br().x; ++x) {
+        // Four pixels at a time: one labelled as its left and upper neighbours is no
+        // crack by either rule, and the run is skipped (most pixels, inside a region or
+        // outside all).
+        while (x + 4 <= inner.br().x && SameAsLeftAndAbove(lr + x, lu + x)) x += 4;
+        if (x >= inner.br().x) break;
         std::uint16_t l = 0;
         float z = 0;
         if (lr[x - 1] != 0 && lr[x - 1] == lr[x + 1] && lr[x - 1] != lr[x]) {
@@ -398,20 +500,15 @@ void ProjectInto(const RefinerOptions& options, const PinholeCamera& camera,
     const auto motion = instance_motion_prev.find(instance.track_id);
     const Eigen::Isometry3d& T =
         motion != instance_motion_prev.end() ? motion->second : T_cur_prev;
-    float fill_depth =
-        options.fill_missing_depth_with_median
-            ? MissingDepthFill(instance.mask, stats.bbox, previous_depth_m, &ws->depths)
-            : 0.0f;
-    if (fill_depth <= 0 && options.project_depthless_regions_at_far_limit &&
-        !RegionHasDepth(instance.mask, stats.bbox, previous_depth_m)) {
+    const auto far_limit_depth = [&] {
       if (!far_limit) far_limit = FarthestDepth(previous_depth_m);
-      fill_depth = *far_limit;
-      ws->at_far_limit[i] = true;
-    }
-    ProjectRegionPixels(options, camera, rays, instance.mask, stats.bbox, previous_depth_m,
-                        fill_depth, T, &ws->splats);
-    ws->touched[i] =
-        SplatIntoZBuffer(ws->splats, static_cast<std::uint16_t>(i + 1), &ws->zbuf, &ws->label);
+      return *far_limit;
+    };
+    bool at_far_limit = false;
+    ws->touched[i] = RegionSplatter(options, camera, rays, T, ws)
+                         .Splat(instance.mask, stats.bbox, previous_depth_m, static_cast<std::uint16_t>(i + 1),
+                                far_limit_depth, &at_far_limit);
+    ws->at_far_limit[i] = at_far_limit;
     if (!ws->touched[i].empty()) {
       all_touched = all_touched.empty() ? ws->touched[i] : (all_touched | ws->touched[i]);
     }
