@@ -749,6 +749,49 @@ TEST(TrackerTest, RelocalizationAtALookAlikeIsReplacedWhileOnProbation) {
   }
 }
 
+// The same look-alike, with the back wall an instance (not of a moveable class) that the
+// depth judgement measures in every frame. When the pose jumps from the look-alike to
+// where the camera is, the frames the judgement remembers were placed by the pose before
+// the jump; measured against the pose after it, the still wall would seem to have moved
+// by the jump (0.78 m; 132 of 155 samples contradicted at the jump when it was kept).
+// The jump starts that memory anew (Impl::DropWorkSince).
+TEST(TrackerTest, JumpOfThePoseStartsTheDepthJudgementsMemoryAnew) {
+  const PinholeCamera camera = TestCamera();
+  auto room = RoomQuads(5);
+  const LongTermMapData map = MapWithALookAlikeBackWall(camera, room);
+  constexpr std::uint16_t kBackWall = 9;
+  room[3].instance_id = kBackWall;  // BoxQuads: {min + x, y, z} is the face at x = max
+  auto pose = [](int frame) {
+    const double turned = std::clamp(frame / 60.0, 0.0, 1.0);
+    return testing::LookingAlongX(Eigen::Vector3d(1.0, 0.0, 1.5), turned * 0.75 * M_PI / 2);
+  };
+  TrackerOptions options;
+  options.rival_pose_distance_m = 0.5;
+  Tracker localizer(camera, options);
+  localizer.LoadLongTermMap(map, "look-alike map");
+  FrameInstances instances;
+  int jumps = 0, wall_judged = 0, wall_moving = 0;
+  for (int i = 0; i < 120; ++i) {
+    const auto rendered = RenderQuads(room, camera, pose(i), i, i / 30.0);
+    instances.ids = rendered.instance_ids;
+    localizer.BeginFrame(rendered.frame);
+    localizer.EstimateCoarsePose();
+    const bool jumped = i > 0 && localizer.CoarsePoseRelocalized();
+    jumps += jumped ? 1 : 0;
+    for (const InstanceJudgement& judgement : localizer.JudgeInstances(instances)) {
+      if (judgement.id != kBackWall || judgement.num_points == 0) continue;
+      ++wall_judged;
+      wall_moving += judgement.moving ? 1 : 0;
+      EXPECT_FALSE(judgement.moving) << "frame " << i << (jumped ? " (the jump)" : "");
+    }
+    localizer.EstimateFinePose();
+    localizer.UpdateMaps();
+  }
+  EXPECT_EQ(jumps, 1);
+  EXPECT_GT(wall_judged, 60);
+  EXPECT_EQ(wall_moving, 0);
+}
+
 // The second visit of a room (localization on the first visit's long-term map) with a
 // panel that was not there before, standing in front of the mapped back wall and
 // printed with the part of the wall it hides: the worst case of a repetitive façade
