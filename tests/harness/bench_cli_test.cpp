@@ -68,6 +68,11 @@ TEST_F(BenchCliTest, MutualLoopWithASegmenterTimesTheMaskRefinement) {
   EXPECT_EQ(json.at("masks"), "simulated fcis-like seed 1");
   EXPECT_GT(json.at("stages_ms").at("mask refinement").at("median").get<double>(), 0.0);
   EXPECT_GT(json.at("stages_ms").at("judge").at("median").get<double>(), 0.0);
+  // The loop without the segmenter: each frame's tracking plus its refinement, so its
+  // median lies above both medians (each frame's sum exceeds either part).
+  const double loop = json.at("stages_ms").at("loop (tracking+refinement)").at("median").get<double>();
+  EXPECT_GT(loop, json.at("stages_ms").at("mask refinement").at("median").get<double>());
+  EXPECT_GT(loop, json.at("stages_ms").at("tracking total").at("median").get<double>());
 
   const CommandOutput gt = Run("bench slam " + sequence.string() + " --mode mutual --frames 3");
   ASSERT_EQ(gt.exit_code, 0) << gt.stderr_text;
