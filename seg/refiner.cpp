@@ -657,10 +657,9 @@ void RefineMatchedRegion(const RefinerOptions& options, const PinholeCamera& cam
   const int tol = options.boundary_tolerance_px;
   double ra_c = static_cast<double>(match.intersection) / cur_stats.area_px;
   double ra_p = static_cast<double>(match.intersection) / prev_stats.area_px;
-  cv::Mat projected_mask, trimmed;
+  cv::Mat trimmed;
   cv::Rect roi;
   if (tol > 0) {
-    projected_mask = RegionMask(ws, p);
     roi = cur_stats.bbox | prev_stats.bbox;
     roi.x -= tol;
     roi.y -= tol;
@@ -668,7 +667,8 @@ void RefineMatchedRegion(const RefinerOptions& options, const PinholeCamera& cam
     roi.height += 2 * tol;
     roi &= cv::Rect(0, 0, camera.width, camera.height);
     const cv::Mat mc = instance->mask(roi) != 0;
-    const cv::Mat mp = projected_mask(roi) != 0;
+    // The projected region within the box, without a frame-sized mask of it.
+    const cv::Mat mp = ws.label(roi) == static_cast<double>(p + 1);
     const cv::Mat kernel =
         cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * tol + 1, 2 * tol + 1));
     cv::Mat mc_wide, mp_wide;
@@ -698,7 +698,7 @@ void RefineMatchedRegion(const RefinerOptions& options, const PinholeCamera& cam
     mask(roi).setTo(1, trimmed);
     instance->mask = mask;
   } else if (replace) {
-    instance->mask = projected_mask.empty() ? RegionMask(ws, p) : projected_mask;
+    instance->mask = RegionMask(ws, p);
   }
   instance->score = std::max(
       instance->score,
