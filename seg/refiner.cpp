@@ -89,9 +89,9 @@ class RegionStatsAccumulator {
     return s;
   }
 
- private:
   // Row y holds `count` > 0 pixels of the region, the first at first_x, the last at
-  // last_x; sum_x is the sum of their columns.
+  // last_x; sum_x is the sum of their columns. Rows come top to bottom; one row may come
+  // in several spans, left to right.
   void AddRowSpan(int y, int first_x, int last_x, int count, std::int64_t sum_x) {
     x_min_ = std::min(x_min_, first_x);
     x_max_ = std::max(x_max_, last_x);
@@ -102,6 +102,7 @@ class RegionStatsAccumulator {
     sum_y_ += static_cast<std::int64_t>(y) * count;
   }
 
+ private:
   int x_min_ = std::numeric_limits<int>::max(), x_max_ = -1;
   int y_min_ = std::numeric_limits<int>::max(), y_max_ = -1;
   int area_px_ = 0;
@@ -434,29 +435,39 @@ void CloseCracks(const RefinerOptions& options, const cv::Rect& area, cv::Mat* z
   }
 }
 
-// Unlabels projected pixels (inside `area`) behind what the current depth image measures
-// there: something now stands in front of the region.
-void DropOccluded(const RefinerOptions& options, const cv::Mat& current_depth_m,
-                  const cv::Rect& area, const cv::Mat& zbuf, cv::Mat* label) {
+// Unlabels the projected pixels (inside `area`) behind what the current depth image
+// measures there, when there is one (something now stands in front of the region), and
+// measures the box, area and barycentre of each region's pixels left, in one scan: a run
+// of pixels of one label adds to its region at once. Closing stays inside the box a
+// region wrote, so `area`, the union of those boxes, holds every labelled pixel.
+std::vector<RegionStats> DropOccludedAndMeasure(const RefinerOptions& options, const cv::Mat& current_depth_m,
+                                                const cv::Rect& area, const cv::Mat& zbuf, size_t regions,
+                                                cv::Mat* label) {
   const float keep = static_cast<float>(1.0 - options.occlusion_tolerance);
+  const bool drop = !current_depth_m.empty();
+  std::vector<RegionStatsAccumulator> accumulators(regions);
   for (int y = area.y; y < area.br().y; ++y) {
     const float* zr = zbuf.ptr<float>(y);
-    const float* dr = current_depth_m.ptr<float>(y);
+    const float* dr = drop ? current_depth_m.ptr<float>(y) : nullptr;
     std::uint16_t* lr = label->ptr<std::uint16_t>(y);
-    for (int x = area.x; x < area.br().x; ++x) {
-      if (lr[x] != 0 && dr[x] > 0 && dr[x] < keep * zr[x]) lr[x] = 0;
+    if (drop) {
+      for (int x = area.x; x < area.br().x; ++x) {
+        if (lr[x] != 0 && dr[x] > 0 && dr[x] < keep * zr[x]) lr[x] = 0;
+      }
+    }
+    for (int x = area.x; x < area.br().x;) {
+      const std::uint16_t id = lr[x];
+      const int start = x;
+      while (x < area.br().x && lr[x] == id) ++x;
+      if (id == 0) continue;
+      const std::int64_t length = x - start;
+      accumulators[id - 1].AddRowSpan(y, start, x - 1, static_cast<int>(length), length * (start + x - 1) / 2);
     }
   }
-}
-
-// Box, area and barycentre of the pixels labelled `id`, searched within `area`.
-RegionStats MeasureLabel(const cv::Mat& label, std::uint16_t id, const cv::Rect& area) {
-  RegionStatsAccumulator region;
-  for (int y = area.y; y < area.br().y; ++y) {
-    region.AddRow(y, label.ptr<std::uint16_t>(y), area.x, area.br().x,
-                  [id](std::uint16_t value) { return value == id; });
-  }
-  return region.Result();
+  std::vector<RegionStats> stats;
+  stats.reserve(regions);
+  for (const RegionStatsAccumulator& accumulator : accumulators) stats.push_back(accumulator.Result());
+  return stats;
 }
 
 // The projection proper: forward-splats each previous region with its depth and motion
@@ -516,13 +527,8 @@ void ProjectInto(const RefinerOptions& options, const PinholeCamera& camera,
 
   CloseCracks(options, all_touched, &ws->zbuf, &ws->label);
   ws->dirty = all_touched;
-  if (!current_depth_m.empty() && !all_touched.empty()) {
-    DropOccluded(options, current_depth_m, all_touched, ws->zbuf, &ws->label);
-  }
-  // Closing stays inside the box a region wrote, so that box is enough to search.
-  for (size_t i = 0; i < n; ++i) {
-    if (ws->touched[i].empty()) continue;
-    ws->regions[i] = MeasureLabel(ws->label, static_cast<std::uint16_t>(i + 1), ws->touched[i]);
+  if (!all_touched.empty()) {
+    ws->regions = DropOccludedAndMeasure(options, current_depth_m, all_touched, ws->zbuf, n, &ws->label);
   }
 }
 
