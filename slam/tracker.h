@@ -152,10 +152,11 @@ struct DepthJudgementOptions {
   // walker moves in a second). No map point is made that far either (max_point_depth_m).
   double max_depth_m = 40.0;
   // Also ask the instance's re-found sparse features where depth did not see it move:
-  // they see a flat face sliding within its own plane, which depth cannot. Off by
-  // default: they also see still cars a few metres away move for a frame or two, and
-  // those false verdicts cost the city more than the sliding faces gain (docs/results.md).
-  bool sparse_features = false;
+  // they see a flat face sliding within its own plane, which depth cannot (without them a
+  // box filling half the view and sliding sideways is taken for still and drags the
+  // pose, TrackerTest.ObjectFillingTheViewThatStartsToMoveIsJudgedMovingAndLeftOutOfThePose).
+  // They also see still cars a few metres away move for a frame or two (docs/tuning.md).
+  bool sparse_features = true;
   // A frame sees the instance move when at least this share of its measured samples is
   // contradicted (the depth there lies beyond moving_distance_m + moving_distance_per_m
   // * depth): a car moving along its length vacates only its ends, and the depth noise

@@ -194,7 +194,6 @@ TEST(DepthJudgementTest, SparseFeaturesSeeWhatDepthCannot) {
   constexpr int kStill = 15, kFrames = 45;
   BoxPath slide = [](int i) { return Eigen::Vector3d(0, i < kStill ? 0.0 : 0.5 * (i - kStill) / kFps, 0); };
   TrackerOptions both;
-  both.depth_judgement.sparse_features = true;
   both.instance_margin_px = 0;
   const auto with_features = JudgeBox(slide, kFrames, both, 1.6);
   const auto depth_only = JudgeBox(slide, kFrames, DepthOnly(), 1.6);
