@@ -183,11 +183,15 @@ std::optional<StagingLeftover> ParseStagingLeftover(const std::filesystem::path&
   return leftover;
 }
 
+bool NoProcessHasPid(long long pid) {
+  // Signal 0 only asks whether the process exists; a number no pid can be names none.
+  if (pid <= 0 || pid > std::numeric_limits<pid_t>::max()) return true;
+  return ::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH;
+}
+
 bool IsAbandoned(const StagingLeftover& leftover) {
   if (!leftover.host.empty() && leftover.host != StagingHostName()) return false;
-  // Signal 0 only asks whether the process exists; a number no pid can be names none.
-  if (leftover.pid <= 0 || leftover.pid > std::numeric_limits<pid_t>::max()) return true;
-  return ::kill(static_cast<pid_t>(leftover.pid), 0) != 0 && errno == ESRCH;
+  return NoProcessHasPid(leftover.pid);
 }
 
 std::string StagingHostName() {

@@ -91,6 +91,10 @@ std::optional<StagingLeftover> ParseStagingLeftover(const std::filesystem::path&
 // file system, is never judged abandoned.
 bool IsAbandoned(const StagingLeftover& leftover);
 
+// True when no process of this host has `pid` (or no process can: pid <= 0 or beyond
+// pid_t); a process of another user counts as there.
+bool NoProcessHasPid(long long pid);
+
 // This machine's host name as staging names record it (characters other than letters,
 // digits, '.', '-' and '_' become '_').
 std::string StagingHostName();

@@ -1,14 +1,12 @@
 #include "core/owner_lock.h"
 
 #include <fcntl.h>  // AT_FDCWD
-#include <signal.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <cstring>
 #include <fstream>
-#include <limits>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -136,9 +134,7 @@ std::optional<LockOwner> ReadLockOwner(const fs::path& path) {
 
 std::string WhyOwnerIsGone(const LockOwner& owner) {
   if (owner.host != StagingHostName()) return "";
-  if (owner.pid <= 0 || owner.pid > std::numeric_limits<pid_t>::max()) return "it names no process";
-  // Signal 0 only asks whether the process exists.
-  if (::kill(static_cast<pid_t>(owner.pid), 0) != 0 && errno == ESRCH) return "no process has its pid on this host";
+  if (NoProcessHasPid(owner.pid)) return "no process has its pid on this host";
   // The PID may have been given to another process since: the start time tells.
   const std::optional<unsigned long long> started = ProcessStartTime(owner.pid);
   if (owner.started != 0 && started && *started != owner.started) {
