@@ -253,6 +253,9 @@ int RunSweep(const SweepArgs& args) {
     sweep["sweep_file"] = args.file;
     sweep["name"] = sweep_file_spec->name;
   }
+  if (!args.emit_sbatch_dir.empty() && fs::exists(args.emit_sbatch_dir) && !fs::is_directory(args.emit_sbatch_dir)) {
+    throw FileError(args.emit_sbatch_dir, "is not a folder; --emit-sbatch takes the folder to write the Slurm scripts into");
+  }
   ClaimSweepFolder(out_dir, sweep);
 
   const int points = grid.PointCount();

@@ -412,6 +412,9 @@ TEST_F(SweepCliTest, BadInputIsOneLineBeforeAnyWork) {
       {"--set bench.tracker.orb.max_feature=500,1000", "unknown field 'orb.max_feature'"},
       {"--set bench.refiner.trim_keeps_region_depth=0,2", "trim_keeps_region_depth: expected 0 or 1"},
       {"--set bench.refiner.trim_keeps_region_depth=0,1 --segmenter gt", "the segmenter is gt"},
+      {"--set office.people_walking=1,2 --emit-sbatch " + kSmallOffice, "is not a folder; --emit-sbatch takes"},
+      {"--set office.people_walking=1,2 --emit-sbatch " + (dir_ / "jobs").string() + " --shard 1/2", "leave --shard out"},
+      {"--set office.people_walking=1,2 --shard slurm", "SLURM_ARRAY_TASK_ID is not set"},
   };
   for (const auto& c : cases) {
     const std::string arguments = "sweep " + kSmallOffice + " " + c.arguments + out;
@@ -420,6 +423,7 @@ TEST_F(SweepCliTest, BadInputIsOneLineBeforeAnyWork) {
     EXPECT_EQ(LineCount(result.stderr_text), 1) << arguments << "\n" << result.stderr_text;
     EXPECT_NE(result.stderr_text.find(c.message), std::string::npos) << arguments << "\n" << result.stderr_text;
     EXPECT_FALSE(fs::exists(dir_ / "cache")) << arguments;
+    EXPECT_FALSE(fs::exists(dir_ / "out")) << arguments;
   }
 }
 
