@@ -114,24 +114,54 @@ void Tracker::Impl::VoteAgainstDepth(const std::vector<Eigen::Vector3d>& points_
   }
 }
 
-DepthVotes Tracker::Impl::MeasureDepthMotion(std::uint16_t id, const Eigen::Isometry3d& T_wc,
-                                             const InstanceSnapshot& past, InstanceJudgement* judgement) const {
+DepthVotes Tracker::Impl::VoteOnDisplacement(std::uint16_t id, const Eigen::Isometry3d& T_wc,
+                                             const InstanceSnapshot& past, const Eigen::Vector3d& displacement_w) const {
   DepthVotes votes;
-  // Forward: the remembered frame's samples of this track, into this frame.
+  // Forward: the remembered frame's samples of this track, moved, into this frame.
   if (const auto found = past.depth_samples_w.find(id); found != past.depth_samples_w.end()) {
-    VoteAgainstDepth(found->second, T_wc.inverse(), current.depth_m, &votes);
+    std::vector<Eigen::Vector3d> points_w;
+    points_w.reserve(found->second.size());
+    for (const Eigen::Vector3d& p_w : found->second) points_w.push_back(p_w + displacement_w);
+    VoteAgainstDepth(points_w, T_wc.inverse(), current.depth_m, &votes);
   }
-  // Backward: this frame's samples, into the remembered frame.
+  // Backward: this frame's samples, moved back, into the remembered frame.
   if (const auto found = current.depth_samples_c.find(id); found != current.depth_samples_c.end()) {
     std::vector<Eigen::Vector3d> points_w;
     points_w.reserve(found->second.size());
-    for (const Eigen::Vector3d& p_c : found->second) points_w.push_back(T_wc * p_c);
+    for (const Eigen::Vector3d& p_c : found->second) points_w.push_back(T_wc * p_c - displacement_w);
     VoteAgainstDepth(points_w, past.T_wc.inverse(), past.depth_m, &votes);
   }
+  return votes;
+}
+
+DepthVotes Tracker::Impl::MeasureDepthMotion(std::uint16_t id, const Eigen::Isometry3d& T_wc,
+                                             const InstanceSnapshot& past, InstanceJudgement* judgement) const {
+  const DepthVotes votes = VoteOnDisplacement(id, T_wc, past, Eigen::Vector3d::Zero());
   judgement->num_points = votes.measured();
   judgement->num_moving_points = votes.moving;
   judgement->moving_share = votes.measured() > 0 ? double(votes.moving) / votes.measured() : 0;
   return votes;
+}
+
+// The sparse features see what depth cannot, a surface sliding within its own plane;
+// but descriptors alias on repeated structure (a car's two wheels, a row of windows),
+// and a still object's feature matched to its twin a wheelbase along reads as a large
+// displacement. The two are told apart by moving the instance's depth samples as the
+// features say it moved: a real slide keeps them on the surface (its ends aside), while
+// an alias pushes a good part of them past the object's end, onto what lies behind.
+// The displacement since `past` is the features' median velocity over that time (their
+// own spans differ: map points are older than the remembered frame).
+bool Tracker::Impl::DepthRefutesSparseMotion(std::uint16_t id, const Eigen::Isometry3d& T_wc,
+                                             const InstanceSnapshot& past, const MotionEvidence& evidence,
+                                             const DepthVotes& still) const {
+  if (evidence.displacements.empty()) return false;
+  const Eigen::Vector3d displacement_w = evidence.MedianVelocity() * (current.stamp_s - past.stamp_s);
+  const DepthVotes moved = VoteOnDisplacement(id, T_wc, past, displacement_w);
+  // Only two measured hypotheses are compared; the samples each counts differ (some
+  // leave the view, some land hidden), so their shares are.
+  const int enough = options.depth_judgement.min_samples;
+  if (still.measured() < enough || moved.measured() < enough) return false;
+  return double(moved.moving) / moved.measured() > double(still.moving) / still.measured();
 }
 
 bool Tracker::Impl::DepthSeesMotion(const DepthVotes& votes, const InstanceJudgement& judgement) const {

@@ -61,7 +61,7 @@ int Tracker::Impl::MotionAgainstPoint(size_t i, const MapPoint* point, const Eig
   if (depth > 0) {
     if (OnDepthEdge(i)) return -1;
     const Eigen::Vector3d displacement = T_wc * current.features.points_cam[i] - point->position_w;
-    evidence->Add(displacement, MovingDistanceThreshold(depth));
+    evidence->Add(displacement, MovingDistanceThreshold(depth), current.stamp_s - point->first_stamp_s);
     return displacement.norm() > MovingDistanceThreshold(depth) ? 1 : 0;
   }
   const Eigen::Vector3d p_c = T_wc.inverse() * point->position_w;
@@ -146,7 +146,7 @@ bool Tracker::Impl::MotionAgainstHistory(std::uint16_t id, const std::vector<int
           snapshot.point_w[static_cast<size_t>(rows[static_cast<size_t>(pair[0].trainIdx)])];
       ++judgement->num_points;
       const double threshold = MovingDistanceThreshold(current.features.depth_m[i]);
-      evidence->Add(x_w - past_w, threshold);
+      evidence->Add(x_w - past_w, threshold, current.stamp_s - snapshot.stamp_s);
       if ((x_w - past_w).norm() > threshold) ++judgement->num_moving_points;
     }
     return current.stamp_s - snapshot.stamp_s >= options.motion_baseline_s - 1e-6;

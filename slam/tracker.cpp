@@ -274,7 +274,10 @@ std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& ins
         const bool sparse_full_baseline =
             s.MeasureInstanceMotion(id, features, T_wc, trust_young_points, &sparse, &evidence);
         s.DecideMotion(sparse_full_baseline, evidence, &sparse);
-        sparse_moving = sparse.moving;
+        // Depth cannot see a slide within a surface, but it can refute one that did
+        // not happen (DepthRefutesSparseMotion).
+        sparse_moving = sparse.moving &&
+                        !(past != nullptr && s.DepthRefutesSparseMotion(id, T_wc, *past, evidence, votes));
       }
       if (given_moving_ids != nullptr) {
         judgement.judged = true;

@@ -149,27 +149,45 @@ struct DepthVotes {
 struct MotionEvidence {
   std::vector<Eigen::Vector3d> displacements;
   std::vector<double> thresholds;
+  std::vector<double> spans_s;  // time between the two positions of each displacement
 
-  void Add(const Eigen::Vector3d& displacement, double threshold) {
+  void Add(const Eigen::Vector3d& displacement, double threshold, double span_s) {
     displacements.push_back(displacement);
     thresholds.push_back(threshold);
+    spans_s.push_back(span_s);
   }
 
   // True when there are no 3-D measurements (reprojection evidence only) or when the
   // median displacement exceeds the median threshold.
   bool ConsensusMoves() const {
     if (displacements.empty()) return true;
-    auto median = [](std::vector<double> values) {
-      std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
-      return values[values.size() / 2];
-    };
-    Eigen::Vector3d median_displacement;
+    return MedianOf(displacements).norm() > Median(thresholds);
+  }
+
+  // The component-wise median velocity of the displacements (world frame, m/s); zero
+  // without any.
+  Eigen::Vector3d MedianVelocity() const {
+    std::vector<Eigen::Vector3d> velocities;
+    for (size_t k = 0; k < displacements.size(); ++k) {
+      if (spans_s[k] > 0) velocities.push_back(displacements[k] / spans_s[k]);
+    }
+    return velocities.empty() ? Eigen::Vector3d::Zero() : MedianOf(velocities);
+  }
+
+ private:
+  static double Median(std::vector<double> values) {
+    std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+    return values[values.size() / 2];
+  }
+  static Eigen::Vector3d MedianOf(const std::vector<Eigen::Vector3d>& vectors) {
+    Eigen::Vector3d median;
     for (int axis = 0; axis < 3; ++axis) {
       std::vector<double> component;
-      for (const Eigen::Vector3d& d : displacements) component.push_back(d[axis]);
-      median_displacement[axis] = median(component);
+      component.reserve(vectors.size());
+      for (const Eigen::Vector3d& v : vectors) component.push_back(v[axis]);
+      median[axis] = Median(std::move(component));
     }
-    return median_displacement.norm() > median(thresholds);
+    return median;
   }
 };
 
@@ -403,6 +421,15 @@ struct Tracker::Impl {
   // both directions; the counts go to judgement->num_points / num_moving_points.
   DepthVotes MeasureDepthMotion(std::uint16_t id, const Eigen::Isometry3d& T_wc, const InstanceSnapshot& past,
                                 InstanceJudgement* judgement) const;
+  // The votes of instance `id`'s depth samples in both directions, as MeasureDepthMotion,
+  // on the hypothesis that it moved by `displacement_w` (world frame) since `past`.
+  DepthVotes VoteOnDisplacement(std::uint16_t id, const Eigen::Isometry3d& T_wc, const InstanceSnapshot& past,
+                                const Eigen::Vector3d& displacement_w) const;
+  // Whether depth refutes the motion the sparse features measured (`evidence`): moved
+  // that way since `past`, the instance's depth samples are contradicted more often than
+  // they are standing still (`still`, the votes on that).
+  bool DepthRefutesSparseMotion(std::uint16_t id, const Eigen::Isometry3d& T_wc, const InstanceSnapshot& past,
+                                const MotionEvidence& evidence, const DepthVotes& still) const;
   // Whether this frame's votes show the instance moving.
   bool DepthSeesMotion(const DepthVotes& votes, const InstanceJudgement& judgement) const;
   // The verdict: whether this frame saw the instance move (its depth or its sparse
