@@ -212,7 +212,6 @@ TEST(DepthJudgementTest, SparseFeaturesSeeWhatDepthCannot) {
   EXPECT_LT(moving_depth_only, moving_with_features);
 }
 
-
 // A still object with repeated structure (a car's two wheels, a row of windows) passed
 // by a camera driving along it: a feature on one copy, matched to the frame a baseline
 // back, finds the copy the camera then saw from where it is now, and reads one period of
