@@ -94,9 +94,10 @@ void Tracker::Impl::SampleInstanceDepth(const cv::Mat& ids) {
 }
 
 void Tracker::Impl::VoteAgainstDepth(const std::vector<Eigen::Vector3d>& points_w, const Eigen::Isometry3d& T_cw,
-                                     const cv::Mat& depth_m, DepthVotes* votes) const {
+                                     const cv::Mat& depth_m, const Eigen::Vector3d& offset_w,
+                                     DepthVotes* votes) const {
   for (const Eigen::Vector3d& point_w : points_w) {
-    const Eigen::Vector3d p_c = T_cw * point_w;
+    const Eigen::Vector3d p_c = T_cw * (point_w + offset_w);
     if (p_c.z() <= 0 || p_c.z() > options.depth_judgement.max_depth_m) continue;
     const Eigen::Vector2d uv = camera.Project(p_c);
     const int u = static_cast<int>(std::lround(uv.x()));
@@ -119,17 +120,14 @@ DepthVotes Tracker::Impl::VoteOnDisplacement(std::uint16_t id, const Eigen::Isom
   DepthVotes votes;
   // Forward: the remembered frame's samples of this track, moved, into this frame.
   if (const auto found = past.depth_samples_w.find(id); found != past.depth_samples_w.end()) {
-    std::vector<Eigen::Vector3d> points_w;
-    points_w.reserve(found->second.size());
-    for (const Eigen::Vector3d& p_w : found->second) points_w.push_back(p_w + displacement_w);
-    VoteAgainstDepth(points_w, T_wc.inverse(), current.depth_m, &votes);
+    VoteAgainstDepth(found->second, T_wc.inverse(), current.depth_m, displacement_w, &votes);
   }
   // Backward: this frame's samples, moved back, into the remembered frame.
   if (const auto found = current.depth_samples_c.find(id); found != current.depth_samples_c.end()) {
     std::vector<Eigen::Vector3d> points_w;
     points_w.reserve(found->second.size());
-    for (const Eigen::Vector3d& p_c : found->second) points_w.push_back(T_wc * p_c - displacement_w);
-    VoteAgainstDepth(points_w, past.T_wc.inverse(), past.depth_m, &votes);
+    for (const Eigen::Vector3d& p_c : found->second) points_w.push_back(T_wc * p_c);
+    VoteAgainstDepth(points_w, past.T_wc.inverse(), past.depth_m, -displacement_w, &votes);
   }
   return votes;
 }

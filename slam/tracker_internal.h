@@ -412,11 +412,12 @@ struct Tracker::Impl {
   // Fills current.depth_samples_c: up to samples_per_instance interior pixels of each
   // instance with depth, back-projected.
   void SampleInstanceDepth(const cv::Mat& ids);
-  // Counts into *votes how many of the world points `points_w`, seen from T_cw in a frame
-  // with depth `depth_m`, agree with that depth and how many lie before it (the depth
-  // there is farther: what was there has gone). Points behind something are not counted.
+  // Counts into *votes how many of the world points `points_w`, each moved by `offset_w`
+  // (world frame, m) and seen from T_cw in a frame with depth `depth_m`, agree with that
+  // depth and how many lie before it (the depth there is farther: what was there has
+  // gone). Points behind something are not counted.
   void VoteAgainstDepth(const std::vector<Eigen::Vector3d>& points_w, const Eigen::Isometry3d& T_cw,
-                        const cv::Mat& depth_m, DepthVotes* votes) const;
+                        const cv::Mat& depth_m, const Eigen::Vector3d& offset_w, DepthVotes* votes) const;
   // This frame's measurement of instance `id` against the remembered frame `past`, in
   // both directions; the counts go to judgement->num_points / num_moving_points.
   DepthVotes MeasureDepthMotion(std::uint16_t id, const Eigen::Isometry3d& T_wc, const InstanceSnapshot& past,
