@@ -2,6 +2,7 @@
 // frame (constant velocity) and from the local map, descriptor matching against the
 // reference keyframe, relocalization against every map point, and the robust pose
 // optimisation that follows each.
+#include <algorithm>
 #include <cmath>
 #include <opencv2/features2d.hpp>
 
@@ -196,6 +197,32 @@ bool Tracker::Impl::TrackWithMotionModel() {
   }
   if (matches < 20) return false;
   return OptimizeCurrentPose(/*skip_excluded=*/false, /*discard_outliers=*/true) >= 10;
+}
+
+// No velocity is known on the frame after the map's first, and the window search around
+// the last pose favours whatever moved with the camera: a camera that starts at speed
+// among traffic finds the car ahead where it was, and too few of the near background's
+// features, which left their windows, to say otherwise. So the reference keyframe's
+// descriptors are also matched anywhere in the image, and the pose that more matches
+// agree with is kept (at rest or slow, the window's: it finds more).
+bool Tracker::Impl::TrackWithoutVelocity() {
+  const auto inliers = [this] {
+    return static_cast<int>(std::count_if(current.points.begin(), current.points.end(),
+                                          [](const MapPoint* point) { return point != nullptr; }));
+  };
+  const bool by_window = TrackWithMotionModel();
+  const int window_inliers = by_window ? inliers() : 0;
+  const Eigen::Isometry3d window_T_cw = current.T_cw;
+  const std::vector<MapPoint*> window_points = current.points;
+  const std::vector<MapPoint*> window_rejected = current.rejected;
+  const std::vector<bool> window_outlier = current.outlier;
+  if (TrackReferenceKeyframe() && inliers() > window_inliers) return true;
+  ClearMatches();
+  current.T_cw = window_T_cw;
+  current.points = window_points;
+  current.rejected = window_rejected;
+  current.outlier = window_outlier;
+  return by_window;
 }
 
 bool Tracker::Impl::TrackReferenceKeyframe() {

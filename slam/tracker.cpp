@@ -180,7 +180,8 @@ std::optional<Eigen::Isometry3d> Tracker::EstimateCoarsePose() {
       relocalized = s.pose_jumped = tracked = s.RelocalizeOffMap();
     }
     if (!relocalized) {
-      tracked = s.TrackWithMotionModel() || s.TrackReferenceKeyframe();
+      const bool after_first_frame = !s.velocity.has_value() && map_->keyframes().size() == 1;
+      tracked = after_first_frame ? s.TrackWithoutVelocity() : s.TrackWithMotionModel() || s.TrackReferenceKeyframe();
       if (tracked) {
         s.MarkCurrentMatched();
         const bool recently_relocalized = s.current.index - s.last_relocalization_frame < 30;

@@ -334,6 +334,8 @@ struct Tracker::Impl {
 
   bool TrackWithMotionModel();
   bool TrackReferenceKeyframe();
+  // The frame after the map's first: no velocity yet (frame_tracking.cpp says why both).
+  bool TrackWithoutVelocity();
   bool TrackLocalMap(int min_inliers, double radius_factor);
   bool InitializeMap();
   struct RelocalizationHypothesis {
