@@ -33,6 +33,16 @@ phase_done() {
   phase_start=$SECONDS
 }
 
+# The builds take about 1.5 GiB (build/), 3.5 GiB more with --sanitize (build-asan/), and
+# the compiler's temporary files go to TMPDIR: a full disk otherwise shows up only as a
+# compiler's "No space left on device" deep in the log.
+need_gib=$((2 + 4 * sanitize))
+free_gib=$(df -P -BG . "${TMPDIR:-/tmp}" 2>/dev/null | awk 'NR > 1 { gsub("G", "", $4); print $4 }' | sort -n | head -1)
+if [ -n "$free_gib" ] && [ "$free_gib" -lt "$need_gib" ]; then
+  echo "scripts/test.sh: warning: only ${free_gib} GiB free on the disk of $(pwd) or ${TMPDIR:-/tmp};" \
+       "these builds need about ${need_gib} GiB" >&2
+fi
+
 bash scripts/install_deps.sh
 bash scripts/build.sh
 phase_done "the Release build"
