@@ -206,6 +206,7 @@ bool Tracker::Impl::TrackWithMotionModel() {
 // descriptors are also matched anywhere in the image, and the pose that more matches
 // agree with is kept (at rest or slow, the window's: it finds more).
 bool Tracker::Impl::TrackWithoutVelocity() {
+  // Outliers were discarded: the matches left are the inliers.
   const auto inliers = [this] {
     return static_cast<int>(std::count_if(current.points.begin(), current.points.end(),
                                           [](const MapPoint* point) { return point != nullptr; }));
@@ -217,11 +218,17 @@ bool Tracker::Impl::TrackWithoutVelocity() {
   const std::vector<MapPoint*> window_rejected = current.rejected;
   const std::vector<bool> window_outlier = current.outlier;
   if (TrackReferenceKeyframe() && inliers() > window_inliers) return true;
+  // Back to the window's matches, each point marked matched by this frame as it was.
   ClearMatches();
   current.T_cw = window_T_cw;
   current.points = window_points;
   current.rejected = window_rejected;
   current.outlier = window_outlier;
+  for (const std::vector<MapPoint*>* matches : {&current.points, &current.rejected}) {
+    for (MapPoint* point : *matches) {
+      if (point != nullptr) point->last_matched_frame = current.index;
+    }
+  }
   return by_window;
 }
 
