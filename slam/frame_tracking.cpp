@@ -204,7 +204,8 @@ bool Tracker::Impl::TrackWithMotionModel() {
 // among traffic finds the car ahead where it was, and too few of the near background's
 // features, which left their windows, to say otherwise. So the reference keyframe's
 // descriptors are also matched anywhere in the image, and the pose that more matches
-// agree with is kept (at rest or slow, the window's: it finds more).
+// agree with is kept. At rest or slow that is mostly the window's, and the frame is
+// tracked exactly as it would be without the second search.
 bool Tracker::Impl::TrackWithoutVelocity() {
   // Outliers were discarded: the matches left are the inliers.
   const auto inliers = [this] {
