@@ -185,6 +185,25 @@ void Tracker::Impl::MarkCurrentMatched() {
   }
 }
 
+Tracker::Impl::SavedMatches Tracker::Impl::SaveMatches() const {
+  return {current.T_cw, current.points, current.rejected, current.outlier};
+}
+
+// Undoes the searches since SaveMatches(): their matches are cleared, and the saved
+// points, kept and rejected, are marked matched by this frame again, as they were.
+void Tracker::Impl::RestoreMatches(const SavedMatches& saved) {
+  ClearMatches();
+  current.T_cw = saved.T_cw;
+  current.points = saved.points;
+  current.rejected = saved.rejected;
+  current.outlier = saved.outlier;
+  for (const std::vector<MapPoint*>* matches : {&current.points, &current.rejected}) {
+    for (MapPoint* point : *matches) {
+      if (point != nullptr) point->last_matched_frame = current.index;
+    }
+  }
+}
+
 bool Tracker::Impl::TrackWithMotionModel() {
   ClearMatches();
   const bool have_velocity = velocity.has_value();
@@ -214,22 +233,9 @@ bool Tracker::Impl::TrackWithoutVelocity() {
   };
   const bool by_window = TrackWithMotionModel();
   const int window_inliers = by_window ? inliers() : 0;
-  const Eigen::Isometry3d window_T_cw = current.T_cw;
-  const std::vector<MapPoint*> window_points = current.points;
-  const std::vector<MapPoint*> window_rejected = current.rejected;
-  const std::vector<bool> window_outlier = current.outlier;
+  const SavedMatches window = SaveMatches();
   if (TrackReferenceKeyframe() && inliers() > window_inliers) return true;
-  // Back to the window's matches, each point marked matched by this frame as it was.
-  ClearMatches();
-  current.T_cw = window_T_cw;
-  current.points = window_points;
-  current.rejected = window_rejected;
-  current.outlier = window_outlier;
-  for (const std::vector<MapPoint*>* matches : {&current.points, &current.rejected}) {
-    for (MapPoint* point : *matches) {
-      if (point != nullptr) point->last_matched_frame = current.index;
-    }
-  }
+  RestoreMatches(window);
   return by_window;
 }
 
@@ -521,11 +527,9 @@ bool Tracker::Impl::RecheckRelocalization() {
   }
   last_probation_check_s = current.stamp_s;
   const int tracked_support = LongTermInliers();
-  const Eigen::Isometry3d tracked_T_cw = current.T_cw;
-  const std::vector<MapPoint*> tracked_points = current.points, tracked_rejected = current.rejected;
-  const std::vector<bool> tracked_outlier = current.outlier;
+  const SavedMatches tracked = SaveMatches();
   const int tracked_coarse_inliers = result.num_coarse_inliers;
-  const Eigen::Vector3d tracked_center = tracked_T_cw.inverse().translation();
+  const Eigen::Vector3d tracked_center = tracked.T_cw.inverse().translation();
   bool replace = Relocalize(true, RivalPolicy::kTakeStronger);
   if (replace) {
     const double moved_m = (current.T_cw.inverse().translation() - tracked_center).norm();
@@ -536,17 +540,8 @@ bool Tracker::Impl::RecheckRelocalization() {
   if (!replace) {
     // The map points the search looked at keep that look in their visible count, as a
     // losing rival's do.
-    ClearMatches();
-    current.T_cw = tracked_T_cw;
-    current.points = tracked_points;
-    current.outlier = tracked_outlier;
-    current.rejected = tracked_rejected;
+    RestoreMatches(tracked);
     result.num_coarse_inliers = tracked_coarse_inliers;
-    for (const std::vector<MapPoint*>* matches : {&current.points, &current.rejected}) {
-      for (MapPoint* point : *matches) {
-        if (point != nullptr) point->last_matched_frame = current.index;
-      }
-    }
     return false;
   }
   DropWorkSince(probation_first_point, last_relocalization_frame);

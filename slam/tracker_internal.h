@@ -329,6 +329,15 @@ struct Tracker::Impl {
   int SearchLocalMap(double radius_factor);
   void ClearMatches();
   void MarkCurrentMatched();
+  // The current frame's pose and matches, to go back to when a second search loses.
+  struct SavedMatches {
+    Eigen::Isometry3d T_cw;
+    std::vector<MapPoint*> points;
+    std::vector<MapPoint*> rejected;
+    std::vector<bool> outlier;
+  };
+  SavedMatches SaveMatches() const;
+  void RestoreMatches(const SavedMatches& saved);
 
   // ------------------------------------------- tracking stages (frame_tracking.cpp)
 
