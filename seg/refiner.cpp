@@ -341,8 +341,6 @@ class RegionSplatter {
                  const Eigen::Isometry3d& T, ProjectionWorkspace* ws)
       : options_(options),
         rays_(rays),
-        width_(camera.width),
-        height_(camera.height),
         ws_(ws),
         zbuf_data_(ws->zbuf.data),
         label_data_(ws->label.data),
@@ -486,7 +484,6 @@ class RegionSplatter {
   const RefinerOptions& options_;
   const PixelRays& rays_;
   SplatConstants k_;
-  const int width_, height_;
   ProjectionWorkspace* ws_;
   std::uint8_t* zbuf_data_;
   std::uint8_t* label_data_;
