@@ -113,6 +113,10 @@ TEST(ProjectRegionsTest, PlanarRegionMatchesAnalyticProjection) {
       {"translation_x", Translation(25.3 * depth_m / 500.0, 0, 0), true},
       {"translation_xy", Translation(-40.2 * depth_m / 500.0, 12.7 * depth_m / 500.0, 0),
        true},
+      // Most of the region leaves the image over its right and top edges: what stays in
+      // is clipped exactly at the image's border.
+      {"partly_out_right_and_top", Translation(400.3 * depth_m / 500.0, -180.2 * depth_m / 500.0, 0), true},
+      {"partly_out_left_and_bottom", Translation(-250.4 * depth_m / 500.0, 300.2 * depth_m / 500.0, 0), true},
       {"rotation_optical_axis_20deg", rotation, false},
       {"rotation_optical_axis_45deg", rotation_45, false},
       // Closer by 0.5 m: magnified 2 / 1.5 = 1.33.
