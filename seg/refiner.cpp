@@ -196,6 +196,7 @@ void ResetWorkspace(int width, int height, size_t regions, ProjectionWorkspace* 
     ws->label(ws->dirty).setTo(0);
   }
   ws->dirty = cv::Rect();
+  ws->row.Resize(width);
   ws->regions.assign(regions, RegionStats());
   ws->touched.assign(regions, cv::Rect());
   ws->at_far_limit.assign(regions, false);
@@ -238,9 +239,8 @@ struct SplatConstants {
   double r[9];  // R, row-major
   double t[3];
   double fx, fy, cx, cy, fx_over_fy, fy_over_fx;
-  double u_limit, v_limit;  // a projection beyond these lands outside the image
   double half_footprint, min_depth_m;
-  int width, height;
+  int width, height;  // of the image, in pixels
 };
 
 // Projects the n pixels of one row: pixel i has the ray (ray_x[i], y, 1) and depth[i],
@@ -262,7 +262,8 @@ inline __attribute__((always_inline)) void ProjectRowBody(const SplatConstants& 
   const double t0 = k.t[0], t1 = k.t[1], t2 = k.t[2];
   const double fx = k.fx, fy = k.fy, cx = k.cx, cy = k.cy;
   const double fx_over_fy = k.fx_over_fy, fy_over_fx = k.fy_over_fx;
-  const double u_limit = k.u_limit, v_limit = k.v_limit;
+  // A projection beyond these lands outside the image.
+  const double u_limit = k.width + 0.5, v_limit = k.height + 0.5;
   const double half = k.half_footprint, min_depth = k.min_depth_m;
   // Footprint edges are clamped to a little outside the image before they are rounded,
   // which keeps the conversion to int defined and changes no pixel covered.
@@ -356,13 +357,10 @@ class RegionSplatter {
     k_.cy = camera.cy;
     k_.fx_over_fy = camera.fx / camera.fy;
     k_.fy_over_fx = camera.fy / camera.fx;
-    k_.u_limit = camera.width + 0.5;
-    k_.v_limit = camera.height + 0.5;
     k_.half_footprint = 0.5 * options.splat_footprint_scale;
     k_.min_depth_m = options.min_depth_m;
     k_.width = camera.width;
     k_.height = camera.height;
-    ws->row.Resize(camera.width);
   }
 
   // Splats the region (inside bbox) under `id`; `far_limit` gives the depth for a region
@@ -433,21 +431,17 @@ class RegionSplatter {
     ProjectRow(k_, RowBase(v), n, &ws_->row);
     for (int i = 0; i < n; ++i) {
       const int x0 = row.x0[i], x1 = row.x1[i], y0 = row.y0[i], y1 = row.y1[i];
-      if (x0 == x1 && y0 == y1) {
-        // One pixel (nearly all, at footprint scale 1 and a frame's motion): no branch
-        // on what is there, which overlapping regions make unpredictable.
-        box_x0_ = std::min(box_x0_, x0);
-        box_x1_ = std::max(box_x1_, x1);
-        box_y0_ = std::min(box_y0_, y0);
-        box_y1_ = std::max(box_y1_, y1);
-        WriteIfNearer(x0, y0, row.z[i]);
-        continue;
-      }
-      if (x0 > x1 || y0 > y1) continue;
+      // One pixel, nearly all at footprint scale 1 and a frame's motion, is tested first.
+      const bool one_pixel = x0 == x1 && y0 == y1;
+      if (!one_pixel && (x0 > x1 || y0 > y1)) continue;
       box_x0_ = std::min(box_x0_, x0);
       box_x1_ = std::max(box_x1_, x1);
       box_y0_ = std::min(box_y0_, y0);
       box_y1_ = std::max(box_y1_, y1);
+      if (one_pixel) {
+        WriteIfNearer(x0, y0, row.z[i]);
+        continue;
+      }
       for (int y = y0; y <= y1; ++y) {
         for (int x = x0; x <= x1; ++x) WriteIfNearer(x, y, row.z[i]);
       }
@@ -455,8 +449,8 @@ class RegionSplatter {
   }
 
   // Writes depth z and the region's label at (x, y) when nearer than what is there.
-  // Without a branch: the new and old values are blended bitwise (GCC compiles a select
-  // of floats into a branch).
+  // Without a branch, which overlapping regions make unpredictable: the new and old
+  // values are blended bitwise (GCC compiles a select of floats into a branch).
   inline __attribute__((always_inline)) void WriteIfNearer(int x, int y, float z) {
     float* zbuf = reinterpret_cast<float*>(zbuf_data_ + y * zbuf_step_) + x;
     std::uint16_t* label = reinterpret_cast<std::uint16_t*>(label_data_ + y * label_step_) + x;
