@@ -10,20 +10,12 @@
 #include <string>
 
 #include "core/error.h"
+#include "slam/fast_corners.h"
 
 namespace segslam::slam {
 namespace {
 
-// FAST looks at a circle of radius 3 and reports no corner within 3 px of its input's
-// edge, so detection windows are widened by this much to find corners up to their edge.
-constexpr int kFastRadiusPx = 3;
 constexpr int kOrientationRadiusPx = OrbExtractor::kPatchSizePx / 2;
-
-struct Corner {
-  int x = 0;  // level pixel coordinates
-  int y = 0;
-  float response = 0;
-};
 
 // A rectangle of the detection region [x0, x1) x [y0, y1) and the corners inside it.
 struct QuadNode {
@@ -37,7 +29,7 @@ struct QuadNode {
   }
 };
 
-void SplitNode(const QuadNode& node, const std::vector<Corner>& corners,
+void SplitNode(const QuadNode& node, const std::vector<FastCorner>& corners,
                std::vector<QuadNode>* children) {
   const float mx = 0.5f * (node.x0 + node.x1);
   const float my = 0.5f * (node.y0 + node.y1);
@@ -46,7 +38,7 @@ void SplitNode(const QuadNode& node, const std::vector<Corner>& corners,
                            {node.x0, my, mx, node.y1, {}},
                            {mx, my, node.x1, node.y1, {}}};
   for (int index : node.members) {
-    const Corner& c = corners[index];
+    const FastCorner& c = corners[index];
     quadrants[(c.x >= mx ? 1 : 0) + (c.y >= my ? 2 : 0)].members.push_back(index);
   }
   for (QuadNode& q : quadrants) {
@@ -58,7 +50,7 @@ void SplitNode(const QuadNode& node, const std::vector<Corner>& corners,
 // round, the most crowded first once a full round could overshoot) until it has `budget`
 // non-empty leaves, and each leaf keeps its strongest corner. Sparse areas thus keep their
 // corners while dense areas keep only their best ones.
-std::vector<int> DistributeByQuadtree(const std::vector<Corner>& corners, float x0, float y0,
+std::vector<int> DistributeByQuadtree(const std::vector<FastCorner>& corners, float x0, float y0,
                                       float x1, float y1, int budget) {
   if (budget <= 0 || corners.empty()) return {};
   // Start with near-square roots so that splits produce near-square cells.
@@ -126,25 +118,15 @@ std::vector<int> DistributeByQuadtree(const std::vector<Corner>& corners, float 
   return selected;
 }
 
-void AppendFastCorners(const cv::Mat& level_image, const cv::Rect& window, int threshold,
-                       const cv::Rect& keep, std::vector<Corner>* corners) {
-  std::vector<cv::KeyPoint> found;
-  cv::FAST(level_image(window), found, threshold, /*nonmaxSuppression=*/true);
-  for (const cv::KeyPoint& k : found) {
-    const int x = cvRound(k.pt.x) + window.x;
-    const int y = cvRound(k.pt.y) + window.y;
-    if (keep.contains({x, y})) corners->push_back({x, y, k.response});
-  }
-}
-
 // FAST corners of one level inside `region`, found with the initial threshold over the
-// whole region and again with the minimum threshold in each grid cell left empty.
-std::vector<Corner> DetectCornersInCells(const cv::Mat& level_image, const cv::Rect& region,
-                                         const OrbExtractorOptions& options) {
-  std::vector<Corner> corners;
-  const cv::Rect fast_window(region.x - kFastRadiusPx, region.y - kFastRadiusPx,
-                             region.width + 2 * kFastRadiusPx, region.height + 2 * kFastRadiusPx);
-  AppendFastCorners(level_image, fast_window, options.initial_fast_threshold, region, &corners);
+// whole region and again with the minimum threshold in each grid cell left empty (each
+// search as cv::FAST over it, from one map of scores).
+std::vector<FastCorner> DetectCornersInCells(const cv::Mat& level_image, const cv::Rect& region,
+                                             const OrbExtractorOptions& options) {
+  cv::Mat scores;
+  ComputeFastScores(level_image, region, options.min_fast_threshold, &scores);
+  std::vector<FastCorner> corners;
+  AppendFastCorners(scores, region, options.initial_fast_threshold, &corners);
   if (options.min_fast_threshold >= options.initial_fast_threshold) return corners;
 
   const int cols = std::max(1, region.width / options.cell_size_px);
@@ -153,7 +135,7 @@ std::vector<Corner> DetectCornersInCells(const cv::Mat& level_image, const cv::R
     return origin + static_cast<int>(static_cast<long>(extent) * i / cells);
   };
   std::vector<int> count(static_cast<size_t>(cols) * rows, 0);
-  for (const Corner& c : corners) {
+  for (const FastCorner& c : corners) {
     // Inverse of cell_edge: the cell whose integer range [edge(i), edge(i+1)) holds c.
     int col = static_cast<int>(static_cast<long>(c.x - region.x) * cols / region.width);
     int row = static_cast<int>(static_cast<long>(c.y - region.y) * rows / region.height);
@@ -170,10 +152,8 @@ std::vector<Corner> DetectCornersInCells(const cv::Mat& level_image, const cv::R
       const int cx1 = cell_edge(region.x, region.width, cols, col + 1);
       const int cy0 = cell_edge(region.y, region.height, rows, row);
       const int cy1 = cell_edge(region.y, region.height, rows, row + 1);
-      const cv::Rect cell(cx0, cy0, cx1 - cx0, cy1 - cy0);
-      const cv::Rect window(cx0 - kFastRadiusPx, cy0 - kFastRadiusPx,
-                            cell.width + 2 * kFastRadiusPx, cell.height + 2 * kFastRadiusPx);
-      AppendFastCorners(level_image, window, options.min_fast_threshold, cell, &corners);
+      AppendFastCorners(scores, cv::Rect(cx0, cy0, cx1 - cx0, cy1 - cy0), options.min_fast_threshold,
+                        &corners);
     }
   }
   return corners;
@@ -305,7 +285,7 @@ void AttachDepth(const cv::Mat& depth_m, const PinholeCamera& camera, const OrbE
 std::vector<cv::KeyPoint> OrbExtractor::DetectLevel(const cv::Mat& level_image, int level) const {
   const cv::Rect region(kBorderPx, kBorderPx, level_image.cols - 2 * kBorderPx,
                         level_image.rows - 2 * kBorderPx);
-  const std::vector<Corner> corners = DetectCornersInCells(level_image, region, options_);
+  const std::vector<FastCorner> corners = DetectCornersInCells(level_image, region, options_);
   const std::vector<int> selected = DistributeByQuadtree(
       corners, static_cast<float>(region.x), static_cast<float>(region.y),
       static_cast<float>(region.x + region.width), static_cast<float>(region.y + region.height),
@@ -313,7 +293,7 @@ std::vector<cv::KeyPoint> OrbExtractor::DetectLevel(const cv::Mat& level_image, 
   std::vector<cv::KeyPoint> keypoints;
   keypoints.reserve(selected.size());
   for (int index : selected) {
-    const Corner& c = corners[index];
+    const FastCorner& c = corners[index];
     keypoints.emplace_back(cv::Point2f(static_cast<float>(c.x), static_cast<float>(c.y)),
                            static_cast<float>(kPatchSizePx),
                            IntensityCentroidAngle(level_image, c.x, c.y, circle_half_widths_), c.response, 0);
