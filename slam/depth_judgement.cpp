@@ -38,18 +38,23 @@ std::map<std::uint16_t, Region> InstanceRegions(const cv::Mat& ids, int step) {
   Region* last = nullptr;
   for (int v = 0; v < ids.rows; v += step) {
     const std::uint16_t* row = ids.ptr<std::uint16_t>(v);
-    for (int u = 0; u < ids.cols; u += step) {
+    // Run by run of one id: a region is updated once per run, not once per pixel.
+    for (int u = 0; u < ids.cols;) {
       const std::uint16_t id = row[u];
+      const int first = u;
+      do {
+        u += step;
+      } while (u < ids.cols && row[u] == id);
       if (id == 0) continue;
       if (last == nullptr || id != last_id) {
         last = &regions[id];
         last_id = id;
       }
-      last->min_u = std::min(last->min_u, u);
-      last->max_u = std::max(last->max_u, u);
+      last->min_u = std::min(last->min_u, first);
+      last->max_u = std::max(last->max_u, u - step);
       last->min_v = std::min(last->min_v, v);
       last->max_v = std::max(last->max_v, v);
-      ++last->area;
+      last->area += (u - first) / step;
     }
   }
   return regions;
