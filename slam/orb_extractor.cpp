@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numeric>
 #include <opencv2/features2d.hpp>
@@ -17,32 +18,52 @@ namespace {
 
 constexpr int kOrientationRadiusPx = OrbExtractor::kPatchSizePx / 2;
 
-// A rectangle of the detection region [x0, x1) x [y0, y1) and the corners inside it.
+// A rectangle of the detection region [x0, x1) x [y0, y1) and the corners inside it:
+// the indices [begin, end) of an array that keeps each node's corners together, in
+// ascending order.
 struct QuadNode {
   float x0 = 0, y0 = 0, x1 = 0, y1 = 0;
-  std::vector<int> members;
+  int begin = 0, end = 0;
 
+  int size() const { return end - begin; }
   bool CanSplit() const {
     // A node smaller than half a pixel both ways holds one integer position at most;
     // the guard only matters for duplicate positions, which splitting cannot separate.
-    return members.size() > 1 && (x1 - x0 >= 0.5f || y1 - y0 >= 0.5f);
+    return size() > 1 && (x1 - x0 >= 0.5f || y1 - y0 >= 0.5f);
   }
 };
 
-void SplitNode(const QuadNode& node, const std::vector<FastCorner>& corners,
-               std::vector<QuadNode>* children) {
+// Sorts the indices [begin, end) by bucket, keeping their order within a bucket (a
+// counting sort through `scratch`), and returns where each bucket starts; bucket_of(index)
+// is in [0, kBuckets).
+template <int kBuckets, typename BucketOf>
+std::array<int, kBuckets + 1> GroupByBucket(int begin, int end, BucketOf bucket_of, std::vector<int>* indices,
+                                            std::vector<int>* scratch) {
+  std::array<int, kBuckets + 1> start{};
+  for (int i = begin; i < end; ++i) ++start[bucket_of((*indices)[i]) + 1];
+  start[0] = begin;
+  for (int b = 0; b < kBuckets; ++b) start[b + 1] += start[b];
+  std::array<int, kBuckets> next;
+  std::copy(start.begin(), start.end() - 1, next.begin());
+  for (int i = begin; i < end; ++i) (*scratch)[next[bucket_of((*indices)[i])]++] = (*indices)[i];
+  std::copy(scratch->begin() + begin, scratch->begin() + end, indices->begin() + begin);
+  return start;
+}
+
+void SplitNode(const QuadNode& node, const std::vector<FastCorner>& corners, std::vector<int>* indices,
+               std::vector<int>* scratch, std::vector<QuadNode>* children) {
   const float mx = 0.5f * (node.x0 + node.x1);
   const float my = 0.5f * (node.y0 + node.y1);
-  QuadNode quadrants[4] = {{node.x0, node.y0, mx, my, {}},
-                           {mx, node.y0, node.x1, my, {}},
-                           {node.x0, my, mx, node.y1, {}},
-                           {mx, my, node.x1, node.y1, {}}};
-  for (int index : node.members) {
-    const FastCorner& c = corners[index];
-    quadrants[(c.x >= mx ? 1 : 0) + (c.y >= my ? 2 : 0)].members.push_back(index);
-  }
-  for (QuadNode& q : quadrants) {
-    if (!q.members.empty()) children->push_back(std::move(q));
+  const std::array<int, 5> start = GroupByBucket<4>(
+      node.begin, node.end,
+      [&](int index) { return (corners[index].x >= mx ? 1 : 0) + (corners[index].y >= my ? 2 : 0); }, indices,
+      scratch);
+  const QuadNode quadrants[4] = {{node.x0, node.y0, mx, my, start[0], start[1]},
+                                 {mx, node.y0, node.x1, my, start[1], start[2]},
+                                 {node.x0, my, mx, node.y1, start[2], start[3]},
+                                 {mx, my, node.x1, node.y1, start[3], start[4]}};
+  for (const QuadNode& q : quadrants) {
+    if (q.size() > 0) children->push_back(q);
   }
 }
 
@@ -56,55 +77,66 @@ std::vector<int> DistributeByQuadtree(const std::vector<FastCorner>& corners, fl
   // Start with near-square roots so that splits produce near-square cells.
   const int num_roots = std::max(1, static_cast<int>(std::lround((x1 - x0) / (y1 - y0))));
   const float root_width = (x1 - x0) / num_roots;
-  std::vector<QuadNode> roots(num_roots);
-  for (int r = 0; r < num_roots; ++r) {
-    roots[r] = {x0 + r * root_width, y0, x0 + (r + 1) * root_width, y1, {}};
-  }
-  for (int i = 0; i < static_cast<int>(corners.size()); ++i) {
+  const int count = static_cast<int>(corners.size());
+  std::vector<int> indices(count);
+  std::iota(indices.begin(), indices.end(), 0);
+  std::vector<int> scratch(count);
+  std::vector<int> root_of(count);
+  for (int i = 0; i < count; ++i) {
     const int r = std::min(num_roots - 1, static_cast<int>((corners[i].x - x0) / root_width));
-    roots[std::max(0, r)].members.push_back(i);
+    root_of[i] = std::max(0, r);
+  }
+  std::vector<int> root_start(num_roots + 1, 0);
+  for (int r : root_of) ++root_start[r + 1];
+  for (int r = 0; r < num_roots; ++r) root_start[r + 1] += root_start[r];
+  {
+    std::vector<int> next(root_start.begin(), root_start.end() - 1);
+    for (int i = 0; i < count; ++i) indices[next[root_of[i]]++] = i;
   }
   std::vector<QuadNode> nodes;
-  for (QuadNode& root : roots) {
-    if (!root.members.empty()) nodes.push_back(std::move(root));
+  for (int r = 0; r < num_roots; ++r) {
+    const QuadNode root{x0 + r * root_width, y0, x0 + (r + 1) * root_width, y1, root_start[r], root_start[r + 1]};
+    if (root.size() > 0) nodes.push_back(root);
   }
 
+  std::vector<int> splittable;
+  std::vector<bool> was_split;
+  std::vector<QuadNode> children;
+  std::vector<QuadNode> next;
   while (static_cast<int>(nodes.size()) < budget) {
-    std::vector<int> splittable;
+    splittable.clear();
     for (int n = 0; n < static_cast<int>(nodes.size()); ++n) {
       if (nodes[n].CanSplit()) splittable.push_back(n);
     }
     if (splittable.empty()) break;
     const bool split_all = static_cast<int>(nodes.size() + 3 * splittable.size()) <= budget;
     if (!split_all) {
-      std::stable_sort(splittable.begin(), splittable.end(), [&nodes](int a, int b) {
-        return nodes[a].members.size() > nodes[b].members.size();
-      });
+      std::stable_sort(splittable.begin(), splittable.end(),
+                       [&nodes](int a, int b) { return nodes[a].size() > nodes[b].size(); });
     }
-    std::vector<bool> was_split(nodes.size(), false);
-    std::vector<QuadNode> children;
+    was_split.assign(nodes.size(), false);
+    children.clear();
     int node_count = static_cast<int>(nodes.size());
     for (int n : splittable) {
       const size_t before = children.size();
-      SplitNode(nodes[n], corners, &children);
+      SplitNode(nodes[n], corners, &indices, &scratch, &children);
       was_split[n] = true;
       node_count += static_cast<int>(children.size() - before) - 1;
       if (!split_all && node_count >= budget) break;
     }
-    std::vector<QuadNode> next;
-    next.reserve(node_count);
+    next.clear();
     for (size_t n = 0; n < nodes.size(); ++n) {
-      if (!was_split[n]) next.push_back(std::move(nodes[n]));
+      if (!was_split[n]) next.push_back(nodes[n]);
     }
-    for (QuadNode& child : children) next.push_back(std::move(child));
-    nodes = std::move(next);
+    next.insert(next.end(), children.begin(), children.end());
+    nodes.swap(next);
   }
 
   std::vector<int> selected;
   selected.reserve(nodes.size());
   for (const QuadNode& node : nodes) {
     selected.push_back(*std::max_element(
-        node.members.begin(), node.members.end(),
+        indices.begin() + node.begin, indices.begin() + node.end,
         [&corners](int a, int b) { return corners[a].response < corners[b].response; }));
   }
   if (static_cast<int>(selected.size()) > budget) {
