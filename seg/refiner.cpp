@@ -12,6 +12,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/error.h"
+#include "core/statistics.h"
 #include "seg/refiner_options.h"
 
 namespace segslam::seg {
@@ -400,9 +401,7 @@ class RegionSplatter {
     if (missing.empty()) return Box();
     float fill_depth = 0;
     if (want_median && !depths.empty()) {
-      auto mid = depths.begin() + depths.size() / 2;
-      std::nth_element(depths.begin(), mid, depths.end());
-      fill_depth = *mid;
+      fill_depth = KthSmallest(&depths, depths.size() / 2);
     }
     const bool measured_nowhere = measured == 0;
     if (fill_depth <= 0 && options_.project_depthless_regions_at_far_limit && measured_nowhere) {
