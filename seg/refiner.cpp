@@ -166,7 +166,8 @@ struct ProjectionWorkspace {
   std::vector<bool> at_far_limit;
   std::vector<float> depths;         // a region's measured depths, for its median
   std::vector<cv::Point> missing;    // a region's pixels without depth
-  // One row's pixels to splat, projected together (RegionSplatter::SplatRow): inputs
+  std::vector<cv::Point> missing_below;  // those of the second row of a pair of rows
+  // One row's points to splat, projected together (RegionSplatter::SplatRow): inputs
   // (ray's x, depth) and outputs (depth where it lands, and the pixel centres its
   // footprint covers there, columns x0..x1 by rows y0..y1, clipped to the image; empty
   // where it lands nowhere).
@@ -179,7 +180,13 @@ struct ProjectionWorkspace {
       z.resize(width);
       for (auto* v : {&x0, &x1, &y0, &y1}) v->resize(width);
     }
-  } row;
+  };
+  // Splatting by blocks: how many previous regions hold each pixel (2 = two or more),
+  // valid inside their boxes. A pixel two regions share must project alike for both.
+  cv::Mat sharers;  // CV_8U
+  RowBatch row;     // single pixels of a row
+  RowBatch below;   // single pixels of the row below it (splatting by blocks)
+  RowBatch blocks;  // the 2x2 blocks of a pair of rows, one point each
 };
 
 namespace {
@@ -197,7 +204,7 @@ void ResetWorkspace(int width, int height, size_t regions, ProjectionWorkspace* 
     ws->label(ws->dirty).setTo(0);
   }
   ws->dirty = cv::Rect();
-  ws->row.Resize(width);
+  for (ProjectionWorkspace::RowBatch* batch : {&ws->row, &ws->below, &ws->blocks}) batch->Resize(width);
   ws->regions.assign(regions, RegionStats());
   ws->touched.assign(regions, cv::Rect());
   ws->at_far_limit.assign(regions, false);
@@ -336,7 +343,8 @@ void ProjectRow(const SplatConstants& k, const std::array<double, 3>& row_base, 
 // every write has the same label and the z-buffer keeps the nearest, so the order of the
 // writes does not matter: pixels with depth are splatted in the one scan that also
 // gathers the median, the others after it. A row's pixels are projected together
-// (ProjectRow), then written one by one.
+// (ProjectRow), then written one by one. With splat_interior_in_blocks, a 2x2 block of
+// the region's own pixels on one surface is one point (SplatMeasuredInBlocks).
 class RegionSplatter {
  public:
   RegionSplatter(const RefinerOptions& options, const PinholeCamera& camera, const PixelRays& rays,
@@ -362,6 +370,8 @@ class RegionSplatter {
     k_.min_depth_m = options.min_depth_m;
     k_.width = camera.width;
     k_.height = camera.height;
+    block_k_ = k_;
+    block_k_.half_footprint = 2 * k_.half_footprint;  // a 2x2 block is twice a pixel's width
   }
 
   // Splats the region (inside bbox) under `id`; `far_limit` gives the depth for a region
@@ -374,33 +384,13 @@ class RegionSplatter {
     box_x0_ = ws_->zbuf.cols, box_y0_ = ws_->zbuf.rows, box_x1_ = -1, box_y1_ = -1;
     std::vector<float>& depths = ws_->depths;
     std::vector<cv::Point>& missing = ws_->missing;
-    ProjectionWorkspace::RowBatch& row = ws_->row;
     depths.clear();
     missing.clear();
-    const bool want_median = options_.fill_missing_depth_with_median;
-    int measured = 0;  // pixels with depth
-    for (int v = bbox.y; v < bbox.br().y; ++v) {
-      const std::uint8_t* m = mask.ptr<std::uint8_t>(v);
-      const float* d = depth_m.ptr<float>(v);
-      int n = 0;
-      for (int u = bbox.x; u < bbox.br().x; ++u) {
-        if (!m[u]) continue;
-        const float z = d[u];
-        if (!HasDepth(z)) {
-          missing.emplace_back(u, v);
-          continue;
-        }
-        if (want_median) depths.push_back(z);
-        row.ray_x[n] = rays_.x[u];
-        row.depth[n] = static_cast<double>(z);
-        ++n;
-      }
-      measured += n;
-      SplatRow(v, n);
-    }
+    const int measured = options_.splat_interior_in_blocks ? SplatMeasuredInBlocks(mask, bbox, depth_m)
+                                                           : SplatMeasuredByPixel(mask, bbox, depth_m);
     if (missing.empty()) return Box();
     float fill_depth = 0;
-    if (want_median && !depths.empty()) {
+    if (options_.fill_missing_depth_with_median && !depths.empty()) {
       fill_depth = KthSmallest(&depths, depths.size() / 2);
     }
     const bool measured_nowhere = measured == 0;
@@ -410,6 +400,7 @@ class RegionSplatter {
     }
     if (fill_depth <= 0) return Box();
     // `missing` runs row by row, top to bottom.
+    ProjectionWorkspace::RowBatch& row = ws_->row;
     for (size_t begin = 0; begin < missing.size();) {
       const int v = missing[begin].y;
       int n = 0;
@@ -417,17 +408,125 @@ class RegionSplatter {
         row.ray_x[n] = rays_.x[missing[begin].x];
         row.depth[n] = static_cast<double>(fill_depth);
       }
-      SplatRow(v, n);
+      SplatRow(k_, RowBase(rays_.y[v]), n, &row);
     }
     return Box();
   }
 
  private:
-  // Projects the row's n gathered pixels and writes each where it lands, nearest first.
-  void SplatRow(int v, int n) {
+  // Splats the region's pixels with depth one by one, keeps their depths for the median
+  // (when wanted) and lists those without depth in ws_->missing. Returns how many had
+  // depth.
+  int SplatMeasuredByPixel(const cv::Mat& mask, const cv::Rect& bbox, const cv::Mat& depth_m) {
+    ProjectionWorkspace::RowBatch& row = ws_->row;
+    int measured = 0;
+    for (int v = bbox.y; v < bbox.br().y; ++v) {
+      const std::uint8_t* m = mask.ptr<std::uint8_t>(v);
+      const float* d = depth_m.ptr<float>(v);
+      int n = 0;
+      for (int u = bbox.x; u < bbox.br().x; ++u) GatherPixel(m, d, u, v, &row, &n, &ws_->missing);
+      measured += n;
+      SplatRow(k_, RowBase(rays_.y[v]), n, &row);
+    }
+    return measured;
+  }
+
+  // The same, by pairs of rows: a 2x2 block inside the region and on one surface is one
+  // point (its centre, its mean depth, a footprint twice as wide); every other pixel
+  // goes alone. Returns how many pixels had depth.
+  int SplatMeasuredInBlocks(const cv::Mat& mask, const cv::Rect& bbox, const cv::Mat& depth_m) {
+    ProjectionWorkspace::RowBatch& row = ws_->row;
+    ProjectionWorkspace::RowBatch& below = ws_->below;
+    ProjectionWorkspace::RowBatch& blocks = ws_->blocks;
+    std::vector<cv::Point>& missing_below = ws_->missing_below;
+    const bool want_median = options_.fill_missing_depth_with_median;
+    const float same_surface = static_cast<float>(1.0 + options_.depth_tolerance);
+    const double* const column_ray_x = rays_.x.data();
+    int measured = 0;
+    for (int v = bbox.y; v < bbox.br().y; v += 2) {
+      if (v + 1 == bbox.br().y) {  // a last row without a pair
+        const std::uint8_t* m = mask.ptr<std::uint8_t>(v);
+        const float* d = depth_m.ptr<float>(v);
+        int n = 0;
+        for (int u = bbox.x; u < bbox.br().x; ++u) GatherPixel(m, d, u, v, &row, &n, &ws_->missing);
+        measured += n;
+        SplatRow(k_, RowBase(rays_.y[v]), n, &row);
+        break;
+      }
+      const std::uint8_t* m0 = mask.ptr<std::uint8_t>(v);
+      const std::uint8_t* m1 = mask.ptr<std::uint8_t>(v + 1);
+      const std::uint8_t* shared0 = ws_->sharers.ptr<std::uint8_t>(v);
+      const std::uint8_t* shared1 = ws_->sharers.ptr<std::uint8_t>(v + 1);
+      const float* d0 = depth_m.ptr<float>(v);
+      const float* d1 = depth_m.ptr<float>(v + 1);
+      missing_below.clear();
+      int n0 = 0, n1 = 0, blocks_here = 0;
+      int u = bbox.x;
+      for (; u + 1 < bbox.br().x; u += 2) {
+        // Only this region's own pixels: a pixel another region shares goes alone, so
+        // that it lands at the same depth for both and the tie rule decides it.
+        const bool own_block = m0[u] && m0[u + 1] && m1[u] && m1[u + 1] && shared0[u] == 1 &&
+                               shared0[u + 1] == 1 && shared1[u] == 1 && shared1[u + 1] == 1;
+        if (own_block) {
+          const float z00 = d0[u], z01 = d0[u + 1], z10 = d1[u], z11 = d1[u + 1];
+          const bool all_measured = HasDepth(z00) && HasDepth(z01) && HasDepth(z10) && HasDepth(z11);
+          const float nearest = std::min(std::min(z00, z01), std::min(z10, z11));
+          const float farthest = std::max(std::max(z00, z01), std::max(z10, z11));
+          if (all_measured && farthest <= nearest * same_surface) {
+            if (want_median) {
+              for (float z : {z00, z01, z10, z11}) ws_->depths.push_back(z);
+            }
+            blocks.ray_x[blocks_here] = 0.5 * (column_ray_x[u] + column_ray_x[u + 1]);
+            blocks.depth[blocks_here] =
+                0.25 * (static_cast<double>(z00) + static_cast<double>(z01) + static_cast<double>(z10) +
+                        static_cast<double>(z11));
+            ++blocks_here;
+            continue;
+          }
+        }
+        for (int x : {u, u + 1}) {
+          GatherPixel(m0, d0, x, v, &row, &n0, &ws_->missing);
+          GatherPixel(m1, d1, x, v + 1, &below, &n1, &missing_below);
+        }
+      }
+      if (u < bbox.br().x) {  // an odd last column
+        GatherPixel(m0, d0, u, v, &row, &n0, &ws_->missing);
+        GatherPixel(m1, d1, u, v + 1, &below, &n1, &missing_below);
+      }
+      // `missing` stays in row order: the lower row's pixels follow the upper row's.
+      ws_->missing.insert(ws_->missing.end(), missing_below.begin(), missing_below.end());
+      measured += n0 + n1 + 4 * blocks_here;
+      SplatRow(k_, RowBase(rays_.y[v]), n0, &row);
+      SplatRow(k_, RowBase(rays_.y[v + 1]), n1, &below);
+      SplatRow(block_k_, RowBase(0.5 * (rays_.y[v] + rays_.y[v + 1])), blocks_here, &blocks);
+    }
+    return measured;
+  }
+
+  // Adds pixel (u, v) of the region (mask row m, depth row d) to `batch` when it has
+  // depth (keeping the depth for the median when wanted), to `missing` when it has none.
+  inline __attribute__((always_inline)) void GatherPixel(const std::uint8_t* m, const float* d, int u, int v,
+                                                         ProjectionWorkspace::RowBatch* batch, int* n,
+                                                         std::vector<cv::Point>* missing) {
+    if (!m[u]) return;
+    const float z = d[u];
+    if (!HasDepth(z)) {
+      missing->emplace_back(u, v);
+      return;
+    }
+    if (options_.fill_missing_depth_with_median) ws_->depths.push_back(z);
+    batch->ray_x[*n] = rays_.x[u];
+    batch->depth[*n] = static_cast<double>(z);
+    ++*n;
+  }
+
+  // Projects a row's n gathered points (constants k, row_base as RowBase gives) and
+  // writes each where it lands, nearest first.
+  void SplatRow(const SplatConstants& k, const std::array<double, 3>& row_base, int n,
+                ProjectionWorkspace::RowBatch* batch) {
     if (n == 0) return;
-    const ProjectionWorkspace::RowBatch& row = ws_->row;
-    ProjectRow(k_, RowBase(v), n, &ws_->row);
+    const ProjectionWorkspace::RowBatch& row = *batch;
+    ProjectRow(k, row_base, n, batch);
     for (int i = 0; i < n; ++i) {
       const int x0 = row.x0[i], x1 = row.x1[i], y0 = row.y0[i], y1 = row.y1[i];
       // One pixel, nearly all at footprint scale 1 and a frame's motion, is tested first.
@@ -463,9 +562,9 @@ class RegionSplatter {
     *label = static_cast<std::uint16_t>((id_ & take) | (*label & ~take));
   }
 
-  // R's second and third columns for row v: R (x, y_v, 1) = x R.col(0) + this.
-  std::array<double, 3> RowBase(int v) const {
-    const double ray_y = rays_.y[v];
+  // R's second and third columns for a row of rays (x, ray_y, 1): R (x, ray_y, 1) =
+  // x R.col(0) + this.
+  std::array<double, 3> RowBase(double ray_y) const {
     return {k_.r[1] * ray_y + k_.r[2], k_.r[4] * ray_y + k_.r[5], k_.r[7] * ray_y + k_.r[8]};
   }
 
@@ -477,6 +576,7 @@ class RegionSplatter {
   const RefinerOptions& options_;
   const PixelRays& rays_;
   SplatConstants k_;
+  SplatConstants block_k_;  // the same with a 2x2 block's footprint
   ProjectionWorkspace* ws_;
   std::uint8_t* zbuf_data_;
   std::uint8_t* label_data_;
@@ -587,6 +687,35 @@ std::vector<RegionStats> DropOccludedAndMeasure(const RefinerOptions& options, c
   return stats;
 }
 
+// count[i] += (mask[i] != 0), saturated at 2; vectorised (the arrays do not overlap).
+void AddHolders(const std::uint8_t* __restrict mask, std::uint8_t* __restrict count, int n) {
+  for (int i = 0; i < n; ++i) {
+    const std::uint8_t sum = static_cast<std::uint8_t>(count[i] + (mask[i] != 0 ? 1 : 0));
+    count[i] = sum < 2 ? sum : 2;
+  }
+}
+
+// Counts, for each pixel inside the previous regions' boxes, how many of the regions hold
+// it (2 standing for two or more) into ws->sharers.
+void CountSharers(const FrameSegmentation& previous_refined, const std::vector<RegionStats>& source_stats,
+                  ProjectionWorkspace* ws) {
+  cv::Rect box;
+  for (const RegionStats& stats : source_stats) {
+    if (stats.area_px > 0) box = box.empty() ? stats.bbox : (box | stats.bbox);
+  }
+  if (ws->sharers.size() != ws->label.size()) ws->sharers.create(ws->label.size(), CV_8U);
+  if (box.empty()) return;
+  ws->sharers(box).setTo(0);
+  for (size_t i = 0; i < source_stats.size(); ++i) {
+    const cv::Rect& bbox = source_stats[i].bbox;
+    if (source_stats[i].area_px == 0) continue;
+    for (int v = bbox.y; v < bbox.br().y; ++v) {
+      AddHolders(previous_refined.instances[i].mask.ptr<std::uint8_t>(v) + bbox.x,
+                 ws->sharers.ptr<std::uint8_t>(v) + bbox.x, bbox.width);
+    }
+  }
+}
+
 // The projection proper: forward-splats each previous region with its depth and motion
 // (its own when estimated, else the camera's) into one z-buffer, closes the cracks the
 // splatting leaves, drops what the current depth shows occluded, and measures each
@@ -621,6 +750,7 @@ void ProjectInto(const RefinerOptions& options, const PinholeCamera& camera,
   std::stable_sort(larger_first.begin(), larger_first.end(), [&](size_t a, size_t b) {
     return source_stats[a].area_px > source_stats[b].area_px;
   });
+  if (options.splat_interior_in_blocks) CountSharers(previous_refined, source_stats, ws);
   for (const size_t i : larger_first) {
     const InstanceMask& instance = previous_refined.instances[i];
     const RegionStats& stats = source_stats[i];

@@ -86,6 +86,12 @@ struct RefinerOptions {
   // factor; in [0.5, 3]. 1.0 tiles the target exactly for translation, rotation and
   // scaling of a plane (hole-free without dilation; pixel-exact under pure shifts).
   double splat_footprint_scale = 1.0;
+  // A region's inside is splatted 2x2 pixels at a time (true): a block whose four pixels
+  // belong to the region and lie on one surface (depths within depth_tolerance) is one
+  // point at its centre and mean depth with a footprint twice as wide, a quarter of the
+  // projections and footprints. Its edges, depth edges and pixels without depth go pixel
+  // by pixel, so the outline is splatted as finely as before. False: every pixel alone.
+  bool splat_interior_in_blocks = false;
   // Passes of depth-aware hole filling after splatting: a pixel that is empty, or shows
   // something farther (by more than depth_tolerance) than a region on both of its sides
   // (left/right or up/down), takes that region; in [0, 8]. 2 closes the 1-2 px cracks

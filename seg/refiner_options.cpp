@@ -15,6 +15,7 @@ const OptionRegistry<RefinerOptions>& RefinerOptionRegistry() {
       SWITCH(fill_missing_depth_with_median, "pixels without depth project at their region's median depth"),
       SWITCH(project_depthless_regions_at_far_limit, "a region without depth projects at the farthest depth measured"),
       REAL(splat_footprint_scale, Closed(0.5, 3), "", "size of each projected point's footprint, times its warped pixel"),
+      SWITCH(splat_interior_in_blocks, "a region's inside is splatted 2x2 pixels at a time, its outline pixel by pixel"),
       WHOLE(hole_fill_iterations, Closed(0, 8), "", "passes of depth-aware hole filling after the projection"),
       REAL(depth_tolerance, ClosedOpen(0, 1), "", "relative depth tolerance of the hole filling (and of trims that keep depth)"),
       REAL(occlusion_tolerance, ClosedOpen(0, 1), "", "relative margin by which current depth must lie in front to hide a projected pixel"),
