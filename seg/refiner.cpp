@@ -418,17 +418,19 @@ class RegionSplatter {
   // (when wanted) and lists those without depth in ws_->missing. Returns how many had
   // depth.
   int SplatMeasuredByPixel(const cv::Mat& mask, const cv::Rect& bbox, const cv::Mat& depth_m) {
-    ProjectionWorkspace::RowBatch& row = ws_->row;
     int measured = 0;
-    for (int v = bbox.y; v < bbox.br().y; ++v) {
-      const std::uint8_t* m = mask.ptr<std::uint8_t>(v);
-      const float* d = depth_m.ptr<float>(v);
-      int n = 0;
-      for (int u = bbox.x; u < bbox.br().x; ++u) GatherPixel(m, d, u, v, &row, &n, &ws_->missing);
-      measured += n;
-      SplatRow(k_, RowBase(rays_.y[v]), n, &row);
-    }
+    for (int v = bbox.y; v < bbox.br().y; ++v) measured += SplatRowByPixel(mask, bbox, depth_m, v);
     return measured;
+  }
+
+  // Row v of the same, alone; returns how many of its pixels had depth.
+  int SplatRowByPixel(const cv::Mat& mask, const cv::Rect& bbox, const cv::Mat& depth_m, int v) {
+    const std::uint8_t* m = mask.ptr<std::uint8_t>(v);
+    const float* d = depth_m.ptr<float>(v);
+    int n = 0;
+    for (int u = bbox.x; u < bbox.br().x; ++u) GatherPixel(m, d, u, v, &ws_->row, &n, &ws_->missing);
+    SplatRow(k_, RowBase(rays_.y[v]), n, &ws_->row);
+    return n;
   }
 
   // The same, by pairs of rows: a 2x2 block inside the region and on one surface is one
@@ -445,12 +447,7 @@ class RegionSplatter {
     int measured = 0;
     for (int v = bbox.y; v < bbox.br().y; v += 2) {
       if (v + 1 == bbox.br().y) {  // a last row without a pair
-        const std::uint8_t* m = mask.ptr<std::uint8_t>(v);
-        const float* d = depth_m.ptr<float>(v);
-        int n = 0;
-        for (int u = bbox.x; u < bbox.br().x; ++u) GatherPixel(m, d, u, v, &row, &n, &ws_->missing);
-        measured += n;
-        SplatRow(k_, RowBase(rays_.y[v]), n, &row);
+        measured += SplatRowByPixel(mask, bbox, depth_m, v);
         break;
       }
       const std::uint8_t* m0 = mask.ptr<std::uint8_t>(v);

@@ -91,7 +91,7 @@ struct RefinerOptions {
   // point at its centre and mean depth with a footprint twice as wide, a quarter of the
   // projections and footprints. Its edges, depth edges and pixels without depth go pixel
   // by pixel, so the outline is splatted as finely as before. False: every pixel alone.
-  bool splat_interior_in_blocks = false;
+  bool splat_interior_in_blocks = true;
   // Passes of depth-aware hole filling after splatting: a pixel that is empty, or shows
   // something farther (by more than depth_tolerance) than a region on both of its sides
   // (left/right or up/down), takes that region; in [0, 8]. 2 closes the 1-2 px cracks
