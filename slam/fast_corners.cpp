@@ -29,7 +29,8 @@ using Bytes32 = std::uint8_t __attribute__((vector_size(32)));
 #endif
 
 // Bytes32 values pass between functions that are all inlined into the one compiled for
-// AVX2, so no call ever uses the ABI GCC warns about.
+// AVX2, so no call ever uses the ABI GCC warns about (parameters go by reference, for
+// which it has nothing to say).
 #pragma GCC diagnostic ignored "-Wpsabi"
 
 template <typename V>
@@ -40,12 +41,12 @@ inline __attribute__((always_inline)) V Load(const std::uint8_t* p) {
 }
 
 template <typename V>
-inline __attribute__((always_inline)) V Min(V a, V b) {
+inline __attribute__((always_inline)) V Min(const V& a, const V& b) {
   return a < b ? a : b;
 }
 
 template <typename V>
-inline __attribute__((always_inline)) V Max(V a, V b) {
+inline __attribute__((always_inline)) V Max(const V& a, const V& b) {
   return a > b ? a : b;
 }
 
@@ -67,7 +68,7 @@ inline __attribute__((always_inline)) V BestArcContrast(const V (&contrast)[kCir
 
 // How much darker and how much brighter than the centre a circle pixel is (0 if it is not).
 template <typename V>
-inline __attribute__((always_inline)) void Contrasts(V centre, V circle, V* darker, V* brighter) {
+inline __attribute__((always_inline)) void Contrasts(const V& centre, const V& circle, V* darker, V* brighter) {
   const V low = Min(centre, circle);
   *darker = static_cast<V>(centre - low);
   *brighter = static_cast<V>(circle - low);
@@ -75,7 +76,7 @@ inline __attribute__((always_inline)) void Contrasts(V centre, V circle, V* dark
 
 // Whether some lane of x exceeds the threshold.
 template <typename V>
-inline __attribute__((always_inline)) bool AnyAbove(V x, std::uint8_t threshold) {
+inline __attribute__((always_inline)) bool AnyAbove(const V& x, std::uint8_t threshold) {
   if constexpr (sizeof(V) == 1) {
     return x > threshold;
   } else {
@@ -92,7 +93,7 @@ inline __attribute__((always_inline)) bool AnyAbove(V x, std::uint8_t threshold)
 // circle pixels a quarter turn apart, so one such pair must differ from the centre by more
 // than the threshold on the same side. Most spans of flat or smooth image fail this.
 template <typename V>
-inline __attribute__((always_inline)) bool MayHoldCorner(V value, const std::uint8_t* centre,
+inline __attribute__((always_inline)) bool MayHoldCorner(const V& value, const std::uint8_t* centre,
                                                          const CircleOffsets& offsets,
                                                          std::uint8_t threshold) {
   V darker[4];
