@@ -23,7 +23,10 @@ double Median(std::vector<double> values) {
 }
 
 float KthSmallest(std::vector<float>* values, std::size_t k) {
-  const std::size_t n = values->size();
+  return KthSmallest(values->data(), values->size(), k);
+}
+
+float KthSmallest(float* values, std::size_t n, std::size_t k) {
   if (k >= n) {
     throw std::invalid_argument("KthSmallest: k = " + std::to_string(k) + " but only " + std::to_string(n) +
                                 " values");
@@ -33,8 +36,8 @@ float KthSmallest(std::vector<float>* values, std::size_t k) {
   constexpr int kBucketBits = 10;
   constexpr std::uint32_t kInfinityBits = 0x7F800000u;  // the bits of +inf
   auto select_among = [&](std::size_t count, std::size_t rank) {
-    std::nth_element(values->begin(), values->begin() + rank, values->begin() + count);
-    return (*values)[rank];
+    std::nth_element(values, values + rank, values + count);
+    return values[rank];
   };
   if (n < kMinCountForHistogram) return select_among(n, k);
 
@@ -44,14 +47,14 @@ float KthSmallest(std::vector<float>* values, std::size_t k) {
     return bits;
   };
   std::uint32_t low = kInfinityBits, high = 0;
-  for (float v : *values) {
-    const std::uint32_t bits = bits_of(v);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint32_t bits = bits_of(values[i]);
     low = std::min(low, bits);
     high = std::max(high, bits);
   }
   // +0 and every negative value, or +inf and NaN, fall outside the positive range.
   if (low == 0 || high >= kInfinityBits) return select_among(n, k);
-  if (low == high) return (*values)[0];
+  if (low == high) return values[0];
 
   // Buckets of equal width over [low, high], at most 2^kBucketBits of them.
   int range_bits = 0;
@@ -60,8 +63,7 @@ float KthSmallest(std::vector<float>* values, std::size_t k) {
   // Four interleaved histograms: runs of equal buckets (a surface's depths) would
   // otherwise wait on their own increments.
   std::array<std::array<std::uint32_t, 1u << kBucketBits>, 4> counts{};
-  const float* data = values->data();
-  for (std::size_t i = 0; i < n; ++i) ++counts[i & 3][(bits_of(data[i]) - low) >> shift];
+  for (std::size_t i = 0; i < n; ++i) ++counts[i & 3][(bits_of(values[i]) - low) >> shift];
   std::size_t below = 0;
   std::uint32_t bucket = 0;
   for (;; ++bucket) {
@@ -72,8 +74,8 @@ float KthSmallest(std::vector<float>* values, std::size_t k) {
   // The bucket's values are moved to the front, and the rank is found among them.
   std::size_t kept = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    const float v = (*values)[i];
-    if (((bits_of(v) - low) >> shift) == bucket) (*values)[kept++] = v;
+    const float v = values[i];
+    if (((bits_of(v) - low) >> shift) == bucket) values[kept++] = v;
   }
   return select_among(kept, k - below);
 }

@@ -20,5 +20,7 @@ double Median(std::vector<double> values);
 // as scratch: its contents are left unspecified. Throws std::invalid_argument when k is
 // not below the count.
 float KthSmallest(std::vector<float>* values, std::size_t k);
+// The same over the n values at `values`.
+float KthSmallest(float* values, std::size_t n, std::size_t k);
 
 }  // namespace segslam

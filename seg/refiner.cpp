@@ -110,28 +110,42 @@ class RegionStatsAccumulator {
   std::int64_t sum_x_ = 0, sum_y_ = 0;
 };
 
-// Row-wise scan; rows without any set pixel are skipped 8 bytes at a time.
+// Whether the 32 bytes at p are all zero. Four scalar words: an array of them, copied
+// at once, went through the stack.
+inline bool AllZero32(const std::uint8_t* p) {
+  std::uint64_t w0, w1, w2, w3;
+  std::memcpy(&w0, p, 8);
+  std::memcpy(&w1, p + 8, 8);
+  std::memcpy(&w2, p + 16, 8);
+  std::memcpy(&w3, p + 24, 8);
+  return (w0 | w1 | w2 | w3) == 0;
+}
+
+// The first non-zero byte of row[begin, end), or end when there is none. A mask is
+// mostly zero runs: they are skipped 32 bytes at a time.
+int FirstNonZero(const std::uint8_t* row, int begin, int end) {
+  int x = begin;
+  while (x + 32 <= end && AllZero32(row + x)) x += 32;
+  while (x < end && row[x] == 0) ++x;
+  return x;
+}
+
+// The last non-zero byte of row[begin, end), or begin - 1 when there is none.
+int LastNonZero(const std::uint8_t* row, int begin, int end) {
+  int x = end;
+  while (x - 32 >= begin && AllZero32(row + x - 32)) x -= 32;
+  while (x > begin && row[x - 1] == 0) --x;
+  return x - 1;
+}
+
+// Row-wise scan: each row from its first set pixel to its last.
 RegionStats Measure(const cv::Mat& mask) {
   RegionStatsAccumulator region;
   for (int y = 0; y < mask.rows; ++y) {
     const std::uint8_t* row = mask.ptr<std::uint8_t>(y);
-    int x = 0;
-    // Skip leading zero words.
-    for (; x + 8 <= mask.cols; x += 8) {
-      std::uint64_t word;
-      std::memcpy(&word, row + x, 8);
-      if (word != 0) break;
-    }
-    if (x >= mask.cols) continue;
-    // Skip trailing zero words.
-    int end = mask.cols;
-    while (end - 8 >= x + 8 && end % 8 == 0) {
-      std::uint64_t word;
-      std::memcpy(&word, row + end - 8, 8);
-      if (word != 0) break;
-      end -= 8;
-    }
-    region.AddMaskRow(y, row, x, end);
+    const int first = FirstNonZero(row, 0, mask.cols);
+    if (first == mask.cols) continue;
+    region.AddMaskRow(y, row, first, LastNonZero(row, first, mask.cols) + 1);
   }
   return region.Result();
 }
@@ -164,7 +178,7 @@ struct ProjectionWorkspace {
   std::vector<cv::Rect> touched;
   // Per previous region: projected at the far limit (it had no depth at all).
   std::vector<bool> at_far_limit;
-  std::vector<float> depths;         // a region's measured depths, for its median
+  std::vector<float> depths;         // room for a region's measured depths, for its median
   std::vector<cv::Point> missing;    // a region's pixels without depth
   std::vector<cv::Point> missing_below;  // those of the second row of a pair of rows
   // One row's points to splat, projected together (RegionSplatter::SplatRow): inputs
@@ -210,7 +224,8 @@ void ResetWorkspace(int width, int height, size_t regions, ProjectionWorkspace* 
   ws->at_far_limit.assign(regions, false);
 }
 
-bool HasDepth(float z) { return z > 0 && std::isfinite(z); }
+// z > 0 and finite (NaN fails both comparisons), without a branch.
+bool HasDepth(float z) { return (z > 0) & (z < std::numeric_limits<float>::infinity()); }
 
 // The largest measured depth of a depth image (the sensor's far limit, near enough),
 // 0 when it measures nothing.
@@ -384,14 +399,18 @@ class RegionSplatter {
     box_x0_ = ws_->zbuf.cols, box_y0_ = ws_->zbuf.rows, box_x1_ = -1, box_y1_ = -1;
     std::vector<float>& depths = ws_->depths;
     std::vector<cv::Point>& missing = ws_->missing;
-    depths.clear();
+    // Room for every pixel's depth, written by index: a push_back per pixel costs a
+    // capacity test and a store of the vector's end.
+    if (depths.size() < static_cast<std::size_t>(bbox.area())) depths.resize(bbox.area());
+    depth_out_ = depths.data();
+    depth_count_ = 0;
     missing.clear();
     const int measured = options_.splat_interior_in_blocks ? SplatMeasuredInBlocks(mask, bbox, depth_m)
                                                            : SplatMeasuredByPixel(mask, bbox, depth_m);
     if (missing.empty()) return Box();
     float fill_depth = 0;
-    if (options_.fill_missing_depth_with_median && !depths.empty()) {
-      fill_depth = KthSmallest(&depths, depths.size() / 2);
+    if (options_.fill_missing_depth_with_median && depth_count_ > 0) {
+      fill_depth = KthSmallest(depths.data(), depth_count_, depth_count_ / 2);
     }
     const bool measured_nowhere = measured == 0;
     if (fill_depth <= 0 && options_.project_depthless_regions_at_far_limit && measured_nowhere) {
@@ -462,16 +481,19 @@ class RegionSplatter {
       for (; u + 1 < bbox.br().x; u += 2) {
         // Only this region's own pixels: a pixel another region shares goes alone, so
         // that it lands at the same depth for both and the tie rule decides it.
-        const bool own_block = m0[u] && m0[u + 1] && m1[u] && m1[u + 1] && shared0[u] == 1 &&
-                               shared0[u + 1] == 1 && shared1[u] == 1 && shared1[u + 1] == 1;
+        // Every test is evaluated (`&`, not `&&`): branches on each would be mispredicted
+        // along every outline.
+        const bool own_block = (m0[u] != 0) & (m0[u + 1] != 0) & (m1[u] != 0) & (m1[u + 1] != 0) &
+                               (shared0[u] == 1) & (shared0[u + 1] == 1) & (shared1[u] == 1) &
+                               (shared1[u + 1] == 1);
         if (own_block) {
           const float z00 = d0[u], z01 = d0[u + 1], z10 = d1[u], z11 = d1[u + 1];
-          const bool all_measured = HasDepth(z00) && HasDepth(z01) && HasDepth(z10) && HasDepth(z11);
+          const bool all_measured = HasDepth(z00) & HasDepth(z01) & HasDepth(z10) & HasDepth(z11);
           const float nearest = std::min(std::min(z00, z01), std::min(z10, z11));
           const float farthest = std::max(std::max(z00, z01), std::max(z10, z11));
           if (all_measured && farthest <= nearest * same_surface) {
             if (want_median) {
-              for (float z : {z00, z01, z10, z11}) ws_->depths.push_back(z);
+              for (float z : {z00, z01, z10, z11}) depth_out_[depth_count_++] = z;
             }
             blocks.ray_x[blocks_here] = 0.5 * (column_ray_x[u] + column_ray_x[u + 1]);
             blocks.depth[blocks_here] =
@@ -511,7 +533,7 @@ class RegionSplatter {
       missing->emplace_back(u, v);
       return;
     }
-    if (options_.fill_missing_depth_with_median) ws_->depths.push_back(z);
+    if (options_.fill_missing_depth_with_median) depth_out_[depth_count_++] = z;
     batch->ray_x[*n] = rays_.x[u];
     batch->depth[*n] = static_cast<double>(z);
     ++*n;
@@ -535,6 +557,15 @@ class RegionSplatter {
       box_y1_ = std::max(box_y1_, y1);
       if (one_pixel) {
         WriteIfNearer(x0, y0, row.z[i]);
+        continue;
+      }
+      // At most 2x2 pixels (a block's footprint, nearly always): its four corners,
+      // without the loops' unpredictable ends. A corner written twice is written alike.
+      if (x1 - x0 <= 1 && y1 - y0 <= 1) {
+        WriteIfNearer(x0, y0, row.z[i]);
+        WriteIfNearer(x1, y0, row.z[i]);
+        WriteIfNearer(x0, y1, row.z[i]);
+        WriteIfNearer(x1, y1, row.z[i]);
         continue;
       }
       for (int y = y0; y <= y1; ++y) {
@@ -579,6 +610,8 @@ class RegionSplatter {
   std::uint8_t* label_data_;
   const std::size_t zbuf_step_, label_step_;
   std::uint16_t id_ = 0;
+  float* depth_out_ = nullptr;  // ws_->depths' storage: the region's measured depths
+  std::size_t depth_count_ = 0;
   int box_x0_ = 0, box_y0_ = 0, box_x1_ = -1, box_y1_ = -1;
 };
 
@@ -601,24 +634,35 @@ bool FourLabelsAre(const std::uint16_t* labels, std::uint64_t four_ids) {
 
 // Depth-aware closing inside `area`: a pixel that is empty, or shows something farther
 // than the region on both of its sides (left and right, or above and below), is a crack
-// in that region and takes its label and mean depth.
+// in that region and takes its label and mean depth. Each iteration scans in place, top
+// to bottom; after the first, only the rows whose inputs changed since they were last
+// scanned (a fill in the row or next to it in the last iteration, or in the row above in
+// this one): any other row would fill nothing.
 void CloseCracks(const RefinerOptions& options, const cv::Rect& area, cv::Mat* zbuf,
                  cv::Mat* label) {
   const float tol = static_cast<float>(1.0 + options.depth_tolerance);
   const cv::Rect inner = area & cv::Rect(1, 1, zbuf->cols - 2, zbuf->rows - 2);
+  if (inner.empty()) return;
+  // Whether row y filled a pixel in the last iteration and in this one, indexed y + 1 -
+  // inner.y so that the rows next to `inner` read false.
+  std::vector<unsigned char> filled_before(inner.height + 2, 1), filled_now(inner.height + 2, 0);
   for (int iteration = 0; iteration < options.hole_fill_iterations; ++iteration) {
     int filled = 0;
     for (int y = inner.y; y < inner.br().y; ++y) {
+      const int r = y + 1 - inner.y;
+      filled_now[r] = 0;
+      if (!(filled_before[r - 1] | filled_before[r] | filled_before[r + 1] | filled_now[r - 1])) continue;
       float* zr = zbuf->ptr<float>(y);
       std::uint16_t* lr = label->ptr<std::uint16_t>(y);
       const std::uint16_t* lu = label->ptr<std::uint16_t>(y - 1);
       const std::uint16_t* ld = label->ptr<std::uint16_t>(y + 1);
       const float* zu = zbuf->ptr<float>(y - 1);
       const float* zd = zbuf->ptr<float>(y + 1);
+      int filled_in_row = 0;
       for (int x = inner.x; x < inner.br().x; ++x) {
-        // Four pixels at a time: one labelled as its left and upper neighbours is no
-        // crack by either rule, and the run is skipped (most pixels, inside a region or
-        // outside all).
+        // A pixel labelled as its left and upper neighbours is no crack by either rule:
+        // runs of them (most pixels, inside a region or outside all) are skipped four at
+        // a time.
         while (x + 4 <= inner.br().x && SameAsLeftAndAbove(lr + x, lu + x)) x += 4;
         if (x >= inner.br().x) break;
         std::uint16_t l = 0;
@@ -635,11 +679,15 @@ void CloseCracks(const RefinerOptions& options, const cv::Rect& area, cv::Mat* z
         if (lr[x] == 0 || zr[x] > z * tol) {
           lr[x] = l;
           zr[x] = z;
-          ++filled;
+          ++filled_in_row;
         }
       }
+      filled_now[r] = filled_in_row > 0;
+      filled += filled_in_row;
     }
     if (filled == 0) break;
+    std::swap(filled_before, filled_now);
+    filled_now.front() = 0;  // the row above `inner`, never scanned
   }
 }
 

@@ -75,6 +75,21 @@ TEST(KthSmallest, EqualsNthElementOnEveryKindOfSpread) {
   }
 }
 
+TEST(KthSmallest, OverACountLooksOnlyAtThoseValues) {
+  // The first 3000 values lie in [1, 2), the rest far below: a selection that read past
+  // the count would find one of those.
+  std::mt19937 rng(6122026);
+  std::uniform_real_distribution<float> low(0.001f, 0.01f), counted(1.0f, 2.0f);
+  std::vector<float> buffer(5000);
+  for (std::size_t i = 0; i < buffer.size(); ++i) buffer[i] = i < 3000 ? counted(rng) : low(rng);
+  const std::vector<float> first(buffer.begin(), buffer.begin() + 3000);
+  for (std::size_t k : {std::size_t{0}, std::size_t{1500}, std::size_t{2999}}) {
+    std::vector<float> scratch = buffer;
+    EXPECT_EQ(KthSmallest(scratch.data(), 3000, k), NthElement(first, k)) << "k = " << k;
+  }
+  EXPECT_THROW(KthSmallest(buffer.data(), 3000, 3000), std::invalid_argument);
+}
+
 TEST(KthSmallest, RefusesARankBeyondTheValues) {
   std::vector<float> values = {1.0f, 2.0f};
   EXPECT_THROW(KthSmallest(&values, 2), std::invalid_argument);
