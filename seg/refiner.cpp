@@ -224,8 +224,7 @@ void ResetWorkspace(int width, int height, size_t regions, ProjectionWorkspace* 
   ws->at_far_limit.assign(regions, false);
 }
 
-// z > 0 and finite (NaN fails both comparisons), without a branch.
-bool HasDepth(float z) { return (z > 0) & (z < std::numeric_limits<float>::infinity()); }
+bool HasDepth(float z) { return z > 0 && std::isfinite(z); }
 
 // The largest measured depth of a depth image (the sensor's far limit, near enough),
 // 0 when it measures nothing.
@@ -481,14 +480,11 @@ class RegionSplatter {
       for (; u + 1 < bbox.br().x; u += 2) {
         // Only this region's own pixels: a pixel another region shares goes alone, so
         // that it lands at the same depth for both and the tie rule decides it.
-        // Every test is evaluated (`&`, not `&&`): branches on each would be mispredicted
-        // along every outline.
-        const bool own_block = (m0[u] != 0) & (m0[u + 1] != 0) & (m1[u] != 0) & (m1[u + 1] != 0) &
-                               (shared0[u] == 1) & (shared0[u + 1] == 1) & (shared1[u] == 1) &
-                               (shared1[u + 1] == 1);
+        const bool own_block = m0[u] && m0[u + 1] && m1[u] && m1[u + 1] && shared0[u] == 1 &&
+                               shared0[u + 1] == 1 && shared1[u] == 1 && shared1[u + 1] == 1;
         if (own_block) {
           const float z00 = d0[u], z01 = d0[u + 1], z10 = d1[u], z11 = d1[u + 1];
-          const bool all_measured = HasDepth(z00) & HasDepth(z01) & HasDepth(z10) & HasDepth(z11);
+          const bool all_measured = HasDepth(z00) && HasDepth(z01) && HasDepth(z10) && HasDepth(z11);
           const float nearest = std::min(std::min(z00, z01), std::min(z10, z11));
           const float farthest = std::max(std::max(z00, z01), std::max(z10, z11));
           if (all_measured && farthest <= nearest * same_surface) {
@@ -634,35 +630,24 @@ bool FourLabelsAre(const std::uint16_t* labels, std::uint64_t four_ids) {
 
 // Depth-aware closing inside `area`: a pixel that is empty, or shows something farther
 // than the region on both of its sides (left and right, or above and below), is a crack
-// in that region and takes its label and mean depth. Each iteration scans in place, top
-// to bottom; after the first, only the rows whose inputs changed since they were last
-// scanned (a fill in the row or next to it in the last iteration, or in the row above in
-// this one): any other row would fill nothing.
+// in that region and takes its label and mean depth.
 void CloseCracks(const RefinerOptions& options, const cv::Rect& area, cv::Mat* zbuf,
                  cv::Mat* label) {
   const float tol = static_cast<float>(1.0 + options.depth_tolerance);
   const cv::Rect inner = area & cv::Rect(1, 1, zbuf->cols - 2, zbuf->rows - 2);
-  if (inner.empty()) return;
-  // Whether row y filled a pixel in the last iteration and in this one, indexed y + 1 -
-  // inner.y so that the rows next to `inner` read false.
-  std::vector<unsigned char> filled_before(inner.height + 2, 1), filled_now(inner.height + 2, 0);
   for (int iteration = 0; iteration < options.hole_fill_iterations; ++iteration) {
     int filled = 0;
     for (int y = inner.y; y < inner.br().y; ++y) {
-      const int r = y + 1 - inner.y;
-      filled_now[r] = 0;
-      if (!(filled_before[r - 1] | filled_before[r] | filled_before[r + 1] | filled_now[r - 1])) continue;
       float* zr = zbuf->ptr<float>(y);
       std::uint16_t* lr = label->ptr<std::uint16_t>(y);
       const std::uint16_t* lu = label->ptr<std::uint16_t>(y - 1);
       const std::uint16_t* ld = label->ptr<std::uint16_t>(y + 1);
       const float* zu = zbuf->ptr<float>(y - 1);
       const float* zd = zbuf->ptr<float>(y + 1);
-      int filled_in_row = 0;
       for (int x = inner.x; x < inner.br().x; ++x) {
-        // A pixel labelled as its left and upper neighbours is no crack by either rule:
-        // runs of them (most pixels, inside a region or outside all) are skipped four at
-        // a time.
+        // Four pixels at a time: one labelled as its left and upper neighbours is no
+        // crack by either rule, and the run is skipped (most pixels, inside a region or
+        // outside all).
         while (x + 4 <= inner.br().x && SameAsLeftAndAbove(lr + x, lu + x)) x += 4;
         if (x >= inner.br().x) break;
         std::uint16_t l = 0;
@@ -679,15 +664,11 @@ void CloseCracks(const RefinerOptions& options, const cv::Rect& area, cv::Mat* z
         if (lr[x] == 0 || zr[x] > z * tol) {
           lr[x] = l;
           zr[x] = z;
-          ++filled_in_row;
+          ++filled;
         }
       }
-      filled_now[r] = filled_in_row > 0;
-      filled += filled_in_row;
     }
     if (filled == 0) break;
-    std::swap(filled_before, filled_now);
-    filled_now.front() = 0;  // the row above `inner`, never scanned
   }
 }
 
