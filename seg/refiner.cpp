@@ -555,13 +555,12 @@ class RegionSplatter {
         WriteIfNearer(x0, y0, row.z[i]);
         continue;
       }
-      // At most 2x2 pixels (a block's footprint, nearly always): its four corners,
-      // without the loops' unpredictable ends. A corner written twice is written alike.
-      if (x1 - x0 <= 1 && y1 - y0 <= 1) {
-        WriteIfNearer(x0, y0, row.z[i]);
-        WriteIfNearer(x1, y0, row.z[i]);
-        WriteIfNearer(x0, y1, row.z[i]);
-        WriteIfNearer(x1, y1, row.z[i]);
+      // Two pixels wide and at most two high (a block's footprint, nearly always): a
+      // pair of pixels on each row, without the loops' unpredictable ends. A row written
+      // twice (y0 = y1) is written alike.
+      if (x1 == x0 + 1 && y1 - y0 <= 1) {
+        WritePairIfNearer(x0, y0, row.z[i]);
+        WritePairIfNearer(x0, y1, row.z[i]);
         continue;
       }
       for (int y = y0; y <= y1; ++y) {
@@ -584,6 +583,29 @@ class RegionSplatter {
     const std::uint32_t bits = (new_bits & take) | (old_bits & ~take);
     std::memcpy(zbuf, &bits, sizeof bits);
     *label = static_cast<std::uint16_t>((id_ & take) | (*label & ~take));
+  }
+
+  // WriteIfNearer at (x, y) and (x + 1, y) at once. Depths are positive or +inf, and
+  // such floats order as their bits do, so the two are compared as integers.
+  inline __attribute__((always_inline)) void WritePairIfNearer(int x, int y, float z) {
+    using Bits2 = std::uint32_t __attribute__((vector_size(8)));
+    using Labels2 = std::uint16_t __attribute__((vector_size(4)));
+    std::uint8_t* zbuf = zbuf_data_ + y * zbuf_step_ + x * sizeof(float);
+    std::uint8_t* label = label_data_ + y * label_step_ + x * sizeof(std::uint16_t);
+    std::uint32_t z_bits;
+    std::memcpy(&z_bits, &z, sizeof z);
+    const Bits2 new_bits = {z_bits, z_bits};
+    Bits2 old_bits;
+    Labels2 old_labels;
+    std::memcpy(&old_bits, zbuf, sizeof old_bits);
+    std::memcpy(&old_labels, label, sizeof old_labels);
+    const Bits2 take = new_bits <= old_bits;  // per pixel, all ones or zero
+    const Bits2 bits = (new_bits & take) | (old_bits & ~take);
+    const Labels2 take_label = __builtin_convertvector(take, Labels2);
+    const Labels2 new_labels = {id_, id_};
+    const Labels2 labels = (new_labels & take_label) | (old_labels & ~take_label);
+    std::memcpy(zbuf, &bits, sizeof bits);
+    std::memcpy(label, &labels, sizeof labels);
   }
 
   // R's second and third columns for a row of rays (x, ray_y, 1): R (x, ray_y, 1) =
