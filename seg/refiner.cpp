@@ -585,8 +585,9 @@ class RegionSplatter {
     *label = static_cast<std::uint16_t>((id_ & take) | (*label & ~take));
   }
 
-  // WriteIfNearer at (x, y) and (x + 1, y) at once. Depths are positive or +inf, and
-  // such floats order as their bits do, so the two are compared as integers.
+  // WriteIfNearer at (x, y) and (x + 1, y) at once. Every depth here is positive or +inf
+  // (points nearer than min_depth_m > 0 are dropped, the reset writes +inf, closing takes
+  // means), and such floats order as their bits do, so they are compared as integers.
   inline __attribute__((always_inline)) void WritePairIfNearer(int x, int y, float z) {
     using Bits2 = std::uint32_t __attribute__((vector_size(8)));
     using Labels2 = std::uint16_t __attribute__((vector_size(4)));
