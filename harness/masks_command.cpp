@@ -211,7 +211,10 @@ int RunMasksExport(const MasksExportArgs& args) {
     if (simulated != nullptr) {
       masks = simulated->Segment(sequence.LoadFrame(i));
       // A network segments the images as stored.
-      for (seg::InstanceMask& instance : masks.instances) instance.mask = sequence.InstanceMaskAsStored(instance.mask);
+      for (seg::InstanceMask& instance : masks.instances) {
+        instance.mask = sequence.InstanceMaskAsStored(instance.mask);
+        seg::FitBounds(&instance);
+      }
     } else {
       // Read as stored, without the undistortion a run applies.
       const fs::path png = folder->MaskPath(i), table = folder->TablePath(i);

@@ -257,6 +257,7 @@ FrameSegmentation CocoDetections::Frame(size_t i) const {
     instance.category_id = detection.category_id;
     instance.score = detection.score;
     instance.mask = DecodeCocoSegmentation(detection.segmentation, image_size_, detection.origin);
+    FitBounds(&instance);
     segmentation.instances.push_back(std::move(instance));
   }
   return segmentation;

@@ -136,6 +136,7 @@ FrameSegmentation ExternalMasksToSegmentation(
     instance.score = detection.score;
     cv::compare(ids, id, instance.mask, cv::CMP_EQ);
     instance.mask /= 255;
+    FitBounds(&instance);
     segmentation.instances.push_back(std::move(instance));
   }
   return segmentation;

@@ -138,14 +138,16 @@ int LastNonZero(const std::uint8_t* row, int begin, int end) {
   return x - 1;
 }
 
-// Row-wise scan: each row from its first set pixel to its last.
-RegionStats Measure(const cv::Mat& mask) {
+// Row-wise scan inside the instance's search box: each row from its first set pixel to
+// its last.
+RegionStats Measure(const InstanceMask& instance) {
+  const cv::Rect box = SearchBox(instance);
   RegionStatsAccumulator region;
-  for (int y = 0; y < mask.rows; ++y) {
-    const std::uint8_t* row = mask.ptr<std::uint8_t>(y);
-    const int first = FirstNonZero(row, 0, mask.cols);
-    if (first == mask.cols) continue;
-    region.AddMaskRow(y, row, first, LastNonZero(row, first, mask.cols) + 1);
+  for (int y = box.y; y < box.br().y; ++y) {
+    const std::uint8_t* row = instance.mask.ptr<std::uint8_t>(y);
+    const int first = FirstNonZero(row, box.x, box.br().x);
+    if (first == box.br().x) continue;
+    region.AddMaskRow(y, row, first, LastNonZero(row, first, box.br().x) + 1);
   }
   return region.Result();
 }
@@ -793,7 +795,7 @@ void ProjectInto(const RefinerOptions& options, const PinholeCamera& camera,
   // larger regions first and letting ties go to the later one gives it to the smaller,
   // more specific region; first-come ties erased such a keyboard from the projection.
   std::vector<RegionStats> source_stats(n);
-  for (size_t i = 0; i < n; ++i) source_stats[i] = Measure(previous_refined.instances[i].mask);
+  for (size_t i = 0; i < n; ++i) source_stats[i] = Measure(previous_refined.instances[i]);
   std::vector<size_t> larger_first(n);
   std::iota(larger_first.begin(), larger_first.end(), size_t{0});
   std::stable_sort(larger_first.begin(), larger_first.end(), [&](size_t a, size_t b) {
@@ -999,8 +1001,12 @@ void RefineMatchedRegion(const RefinerOptions& options, const PinholeCamera& cam
     cv::Mat mask(instance->mask.size(), CV_8U, cv::Scalar(0));
     mask(roi).setTo(1, trimmed);
     instance->mask = mask;
+    instance->bounds = roi;
   } else if (replace) {
     instance->mask = RegionMask(ws, p);
+    instance->bounds = prev_stats.bbox;
+  } else {
+    instance->bounds = cur_stats.bbox;
   }
   instance->score = std::max(
       instance->score,
@@ -1094,6 +1100,7 @@ void AddBackUnmatchedProjections(const RefinerOptions& options, const FrameSegme
       instance.category_id = prev.category_id;
       instance.score = score;
       instance.mask = RegionMask(ws, p);
+      instance.bounds = ws.regions[p].bbox;
       result->refined.instances.push_back(std::move(instance));
     }
     result->decisions.push_back(d);
@@ -1168,7 +1175,7 @@ RefinementResult SegmentationRefiner::Refine(const RefinerInput& in) {
 
   const size_t n_cur = current.instances.size();
   std::vector<RegionStats> cur_stats(n_cur);
-  for (size_t c = 0; c < n_cur; ++c) cur_stats[c] = Measure(current.instances[c].mask);
+  for (size_t c = 0; c < n_cur; ++c) cur_stats[c] = Measure(current.instances[c]);
   const std::vector<std::optional<RegionMatch>> match_of_cur =
       MatchRegions(options_, in.camera, previous, ws, current, cur_stats);
 
@@ -1196,6 +1203,7 @@ RefinementResult SegmentationRefiner::Refine(const RefinerInput& in) {
         continue;
       }
       instance.track_id = FreshId();
+      instance.bounds = cur_stats[c].bbox;
     }
     d.track_id = instance.track_id;
     result.decisions.push_back(d);

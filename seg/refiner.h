@@ -261,7 +261,9 @@ const char* ToString(RegionDecision::Kind kind);
 
 struct RefinementResult {
   // Current instances in input order (refined mask, stable track id; new regions
-  // under min_new_region_score left out), then added ones. Kept masks share pixel data with the input (cv::Mat reference counting).
+  // under min_new_region_score left out), then added ones. Kept masks share pixel data
+  // with the input (cv::Mat reference counting). Every instance's bounds hold its pixels
+  // (seg/segmentation.h), so the next frame's refinement reads only inside them.
   FrameSegmentation refined;
   std::vector<RegionDecision> decisions;  // one per current region, then per projection
   std::string BriefReport() const;        // e.g. "kept 3 replaced 1 new 0 added 1 ..."

@@ -1,5 +1,7 @@
 #include "seg/segmentation.h"
 
+#include <opencv2/imgproc.hpp>
+
 #include <algorithm>
 #include <numeric>
 
@@ -16,9 +18,22 @@ cv::Mat FrameSegmentation::ToIdImage(cv::Size size) const {
   for (size_t i : order) {
     const InstanceMask& instance = instances[i];
     CV_Assert(instance.mask.type() == CV_8U && instance.mask.size() == size);
-    ids.setTo(instance.track_id, instance.mask);
+    const cv::Rect box = SearchBox(instance);
+    ids(box).setTo(instance.track_id, instance.mask(box));
   }
   return ids;
+}
+
+cv::Rect SearchBox(const InstanceMask& instance) {
+  const cv::Rect frame(0, 0, instance.mask.cols, instance.mask.rows);
+  return instance.bounds.empty() ? frame : (instance.bounds & frame);
+}
+
+void FitBounds(InstanceMask* instance) { instance->bounds = cv::boundingRect(instance->mask); }
+
+bool BoundsHoldMask(const InstanceMask& instance) {
+  const cv::Rect pixels = cv::boundingRect(instance.mask);
+  return pixels.empty() || (pixels & SearchBox(instance)) == pixels;
 }
 
 }  // namespace segslam::seg

@@ -19,7 +19,22 @@ struct InstanceMask {
   int category_id = 0;         // COCO category id (core/coco.h)
   float score = 1.0f;          // confidence in [0, 1]; AP ranks detections by it
   cv::Mat mask;                // CV_8U, frame-sized, 1 = instance pixel
+  // A rectangle that holds every pixel of `mask`, as a detector's box does; empty = not
+  // known (the whole frame). Readers look only inside it, so whoever writes `mask` keeps
+  // it true: a mask pixel outside it is not seen. It need not be tight.
+  cv::Rect bounds;
 };
+
+// Where to look for the instance's pixels: its bounds within the mask, else the mask.
+cv::Rect SearchBox(const InstanceMask& instance);
+
+// Sets instance->bounds to the bounding box of its mask's pixels (empty when none); reads
+// the whole mask. For producers that do not know a box.
+void FitBounds(InstanceMask* instance);
+
+// Whether every pixel of the mask lies inside SearchBox (reads the whole mask; for tests
+// and checks of stored input).
+bool BoundsHoldMask(const InstanceMask& instance);
 
 struct FrameSegmentation {
   int frame_index = 0;

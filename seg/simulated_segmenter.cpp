@@ -92,6 +92,7 @@ std::optional<InstanceMask> SimulateInstance(const SimulatedSegmenterOptions& o,
   out.score = Clamp01(score, 0.01);
   out.mask = cv::Mat::zeros(gt_ids.size(), CV_8U);
   mask.copyTo(out.mask(box));
+  out.bounds = box;
   return out;
 }
 
@@ -146,6 +147,7 @@ std::vector<InstanceMask> SimulateFalsePositives(const SimulatedSegmenterOptions
     out.category_id = category;
     out.score = Clamp01(score, 0.01);
     out.mask = std::move(blob);
+    FitBounds(&out);
     blobs.push_back(std::move(out));
   }
   return blobs;
@@ -330,8 +332,9 @@ SimulatedFrame SimulatedSegmenter::SegmentWithTruth(const RgbdFrame& frame) {
   for (size_t k = 0; k < simulated.segmentation.instances.size(); ++k) {
     InstanceMask& instance = simulated.segmentation.instances[k];
     instance.mask = sequence_.InstanceMaskAsLoaded(instance.mask);
+    FitBounds(&instance);
     // Gone in the resampling: a sliver, or (barrel lens) all of it outside the pinhole frame.
-    if (cv::countNonZero(instance.mask) == 0) continue;
+    if (instance.bounds.empty()) continue;
     loaded.segmentation.instances.push_back(std::move(instance));
     loaded.gt_ids.push_back(simulated.gt_ids[k]);
   }

@@ -90,6 +90,7 @@ TEST_F(CocoDetectionsTest, ResultsListWithStemImageIds) {
   const FrameSegmentation frame2 = detections.Frame(2);
   ASSERT_EQ(frame2.instances.size(), 1u);
   EXPECT_EQ(cv::countNonZero(frame2.instances[0].mask != Box(cv::Rect(20, 5, 10, 10))), 0);
+  EXPECT_EQ(frame2.instances[0].bounds, cv::Rect(20, 5, 10, 10));
 
   // A lower threshold keeps the car.
   CocoImportOptions all;

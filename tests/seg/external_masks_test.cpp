@@ -89,6 +89,8 @@ TEST_F(ExternalMasksTest, ReadsAHandMadeFolder) {
     EXPECT_EQ(cup.category_id, 47);
     EXPECT_FLOAT_EQ(cup.score, 0.41f);
     EXPECT_EQ(person.mask.type(), CV_8U);
+    EXPECT_EQ(person.bounds, cv::boundingRect(person.mask));
+    EXPECT_EQ(cup.bounds, cv::boundingRect(cup.mask));
     // Round trip: the id image of the segmentation is the file.
     const cv::Mat back = seg.ToIdImage(cv::Size(kWidth, kHeight));
     EXPECT_EQ(cv::countNonZero(back != Ids(i)), 0);

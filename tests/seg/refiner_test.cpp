@@ -566,6 +566,62 @@ TEST(SegmentationRefinerTest, TrimKeepsWhatLiesAtTheRegionsDepth) {
   EXPECT_LE(Differences(plain_trim.refined.instances[2].mask, RectMask(trimmed_b)), 4);
 }
 
+// The refinement reads each mask only inside its bounds (seg/segmentation.h). Tight,
+// loose or no bounds give the same refinement, two frames on, and every refined region
+// (kept, repaired, trimmed, added, new) comes out with bounds that hold its pixels.
+TEST(SegmentationRefinerTest, BoundsTightLooseOrNoneRefineAlike) {
+  const Scene scene;
+  const cv::Rect wide_b(scene.person_b.x, scene.person_b.y, 2 * scene.person_b.width, scene.person_b.height);
+  FrameSegmentation repaired_and_added;  // person A cut off, chair right, person B missed
+  repaired_and_added.instances.push_back(Instance(0, 62, RectMask(scene.chair), 0.85f));
+  repaired_and_added.instances.push_back(Instance(0, 1, RectMask(cv::Rect(60, 100, 48, 200)), 0.95f));
+  FrameSegmentation trimmed_and_new;  // person B bled twice as wide, a new cup
+  trimmed_and_new.instances.push_back(Instance(0, 1, RectMask(scene.person_a)));
+  trimmed_and_new.instances.push_back(Instance(0, 62, RectMask(scene.chair)));
+  trimmed_and_new.instances.push_back(Instance(0, 1, RectMask(wide_b)));
+  trimmed_and_new.instances.push_back(Instance(0, 47, RectMask(cv::Rect(10, 400, 30, 30))));
+  RefinerOptions options;
+  options.repair_missing_parts = true;
+
+  const auto with_bounds = [](FrameSegmentation s, int margin) {
+    for (InstanceMask& instance : s.instances) {
+      if (margin < 0) continue;  // none: the whole frame
+      FitBounds(&instance);
+      instance.bounds = cv::Rect(instance.bounds.x - margin, instance.bounds.y - margin,
+                                 instance.bounds.width + 2 * margin, instance.bounds.height + 2 * margin);
+    }
+    return s;
+  };
+  for (const FrameSegmentation& current : {repaired_and_added, trimmed_and_new}) {
+    std::vector<RefinementResult> second_frames;
+    for (const int margin : {-1, 0, 7}) {
+      SCOPED_TRACE("margin " + std::to_string(margin));
+      SegmentationRefiner refiner(options);
+      RefinerInput in = scene.Input(with_bounds(current, margin));
+      in.current_depth_m = scene.depth;
+      const RefinementResult first = refiner.Refine(in);
+      SCOPED_TRACE(first.BriefReport());
+      for (const InstanceMask& instance : first.refined.instances) {
+        EXPECT_FALSE(instance.bounds.empty());
+        EXPECT_TRUE(BoundsHoldMask(instance)) << "track " << instance.track_id;
+      }
+      // The next frame projects the refined regions: their bounds are what it reads.
+      in.previous_refined = &first.refined;
+      second_frames.push_back(refiner.Refine(in));
+    }
+    for (size_t k = 1; k < second_frames.size(); ++k) {
+      const RefinementResult& a = second_frames[0];
+      const RefinementResult& b = second_frames[k];
+      EXPECT_EQ(a.BriefReport(), b.BriefReport());
+      ASSERT_EQ(a.refined.instances.size(), b.refined.instances.size());
+      for (size_t i = 0; i < a.refined.instances.size(); ++i) {
+        EXPECT_EQ(a.refined.instances[i].track_id, b.refined.instances[i].track_id);
+        EXPECT_EQ(Differences(a.refined.instances[i].mask, b.refined.instances[i].mask), 0);
+      }
+    }
+  }
+}
+
 TEST(SegmentationRefinerTest, NoAddWhenCountsAreEqualAndCategoryMustMatch) {
   const Scene scene;
   FrameSegmentation current;

@@ -440,6 +440,23 @@ TEST(SimulatedSegmenterTest, FalsePositivesDoNotOverlapGroundTruthAndScoreLow) {
   EXPECT_GT(false_positives, 20);
 }
 
+// The refinement reads a mask only inside its bounds, so a pixel outside them would be
+// lost: every output, bled, jittered or a false positive, must lie inside its bounds.
+TEST(SimulatedSegmenterTest, EveryMaskLiesInsideItsBounds) {
+  SimulatedSegmenterOptions options = SimulatedSegmenterOptions::Preset("fcis-like");
+  options.false_positives_per_frame = 2;
+  options.strength = 2.0;
+  int instances = 0;
+  for (int frame = 0; frame < 20; ++frame) {
+    for (const InstanceMask& instance : Simulate(options, frame).segmentation.instances) {
+      ++instances;
+      EXPECT_FALSE(instance.bounds.empty());
+      EXPECT_TRUE(BoundsHoldMask(instance)) << "frame " << frame << " instance " << instance.track_id;
+    }
+  }
+  EXPECT_GT(instances, 60);
+}
+
 TEST(SimulatedSegmenterTest, TrackIdsAreAPermutationNotGroundTruth) {
   const SimulatedFrame out = Simulate(SimulatedSegmenterOptions(), 2);
   std::vector<int> track_ids;
@@ -694,6 +711,8 @@ TEST_F(SimulatedSegmenterSequenceTest, DistortedSequenceIsSegmentedAsStored) {
     for (int i = 0; i < kFrames; ++i) {
       const SimulatedFrame f = segmenter.SegmentWithTruth(sequence.LoadFrame(i));
       border_car += std::count(f.gt_ids.begin(), f.gt_ids.end(), 5);
+      // The resampled masks are bounded anew.
+      for (const InstanceMask& instance : f.segmentation.instances) EXPECT_TRUE(BoundsHoldMask(instance));
       for (size_t k = 0; k < f.gt_ids.size(); ++k) {
         if (f.gt_ids[k] != 2) continue;
         ++inner_car;
