@@ -32,8 +32,8 @@ cv::Rect SearchBox(const InstanceMask& instance);
 // the whole mask. For producers that do not know a box.
 void FitBounds(InstanceMask* instance);
 
-// Whether every pixel of the mask lies inside SearchBox (reads the whole mask; for tests
-// and checks of stored input).
+// Whether every pixel of the mask lies inside SearchBox (reads the whole mask; for the
+// tests of a producer).
 bool BoundsHoldMask(const InstanceMask& instance);
 
 struct FrameSegmentation {
