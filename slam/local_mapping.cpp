@@ -63,6 +63,8 @@ void Tracker::Impl::CreateKeyframe() {
     point->instance_id = current.instance[i];
     point->labelled_sightings = judged ? 1 : 0;
     point->instance_sightings = judged && current.instance[i] != 0 ? 1 : 0;
+    point->made_on_moveable = current.on_moveable[i];
+    point->moveable_sightings = judged && current.on_moveable[i] ? 1 : 0;
     point->first_keyframe_id = keyframe->id;
     point->first_stamp_s = current.stamp_s;
     point->last_matched_frame = current.index;

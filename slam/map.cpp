@@ -102,8 +102,8 @@ void Map::LoadFixedPoints(const LongTermMapData& data) {
   }
 }
 
-LongTermMapData Map::ToLongTermMap(const PinholeCamera& camera, bool include_instances,
-                                   int min_observations) const {
+LongTermMapData Map::ToLongTermMap(const PinholeCamera& camera, bool include_instances, int min_observations,
+                                   bool keep_fixed_instances) const {
   LongTermMapData data;
   data.camera = camera;
   for (const auto& keyframe : keyframes_) {
@@ -112,7 +112,10 @@ LongTermMapData Map::ToLongTermMap(const PinholeCamera& camera, bool include_ins
   }
   for (const auto& point : points_) {
     if (point->bad) continue;
-    if (!include_instances && (point->instance_id != 0 || point->SeenMostlyOnInstances())) continue;
+    const bool on_instances = keep_fixed_instances
+                                  ? point->made_on_moveable || point->SeenMostlyOnMoveableInstances()
+                                  : point->instance_id != 0 || point->SeenMostlyOnInstances();
+    if (!include_instances && on_instances) continue;
     if (point->NumObservations() < min_observations) continue;
     StoredMapPoint stored;
     stored.id = point->id;

@@ -57,6 +57,9 @@ struct MapPoint {
   // long-term map (SeenMostlyOnInstances).
   int labelled_sightings = 0;
   int instance_sightings = 0;
+  // The same for instances of a moveable class (core/coco.h): made on one, and sightings.
+  bool made_on_moveable = false;
+  int moveable_sightings = 0;
   std::map<Keyframe*, int, KeyframeIdLess> observations;  // keyframe -> keypoint index
   // Bookkeeping of the tracker, so one frame does not match or count a point twice.
   int last_matched_frame = -1;
@@ -69,6 +72,9 @@ struct MapPoint {
   // At least half of its labelled sightings were on an instance: not known to stay put.
   bool SeenMostlyOnInstances() const {
     return instance_sightings > 0 && 2 * instance_sightings >= labelled_sightings;
+  }
+  bool SeenMostlyOnMoveableInstances() const {
+    return moveable_sightings > 0 && 2 * moveable_sightings >= labelled_sightings;
   }
   // Pyramid level at which a point at `distance_m` should be detected (ORB-SLAM's
   // scale prediction), clamped to the pyramid.
@@ -112,10 +118,11 @@ class Map {
   void LoadFixedPoints(const LongTermMapData& data);
   // Background points with at least `min_observations` observations (fixed ones
   // included) as a long-term map, leaving out those seen mostly on instances;
-  // `include_instances` keeps every point instead (the `plain` baseline, which knows no
-  // instances).
-  LongTermMapData ToLongTermMap(const PinholeCamera& camera, bool include_instances,
-                                int min_observations) const;
+  // `keep_fixed_instances` leaves out only those made or seen mostly on instances of a
+  // moveable class; `include_instances` keeps every point instead (the `plain`
+  // baseline, which knows no instances).
+  LongTermMapData ToLongTermMap(const PinholeCamera& camera, bool include_instances, int min_observations,
+                                bool keep_fixed_instances = false) const;
 
   const std::vector<std::unique_ptr<Keyframe>>& keyframes() const { return keyframes_; }
   const std::vector<std::unique_ptr<MapPoint>>& points() const { return points_; }

@@ -115,6 +115,7 @@ void Tracker::BeginFrame(const RgbdFrame& frame) {
   s.current.instance.assign(n, 0);
   s.current.near_instance.assign(n, 0);
   s.current.excluded.assign(n, false);
+  s.current.on_moveable.assign(n, false);
   s.coarse_ok = s.fine_ok = s.judged = s.pose_jumped = false;
   s.dropped_moveable_records.clear();
   s.result = FrameResult();
@@ -163,6 +164,7 @@ void Tracker::DropMoveableFeatures(const FrameInstances& instances) {
   s.current.instance.assign(n, 0);
   s.current.near_instance.assign(n, 0);
   s.current.excluded.assign(n, false);
+  s.current.on_moveable.assign(n, false);
 }
 
 std::optional<Eigen::Isometry3d> Tracker::EstimateCoarsePose() {
@@ -254,6 +256,7 @@ std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& ins
     InstanceJudgement judgement;
     judgement.id = id;
     judgement.moveable_class = instances.moveable_ids.count(id) > 0;
+    for (const int f : features) s.current.on_moveable[static_cast<size_t>(f)] = judgement.moveable_class;
     judgement.num_features = static_cast<int>(features.size());
     InstanceMotionMemory& memory = s.motion_memory[id];
     if (s.coarse_ok && by_depth) {
@@ -313,6 +316,7 @@ std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& ins
     if (point == nullptr || point->bad || point->fixed) continue;
     ++point->labelled_sightings;
     point->instance_sightings += s.current.instance[i] != 0;
+    point->moveable_sightings += s.current.on_moveable[i];
   }
   s.judged = true;
   s.result.instances = judgements;
@@ -418,7 +422,8 @@ FrameResult Tracker::UpdateMaps() {
 
 LongTermMapData Tracker::ExportLongTermMap(bool include_instances) const {
   if (loaded_map_.has_value()) return *loaded_map_;
-  return map_->ToLongTermMap(camera_, include_instances, options_.long_term_min_observations);
+  return map_->ToLongTermMap(camera_, include_instances, options_.long_term_min_observations,
+                             options_.long_term_map_keeps_fixed_instances);
 }
 
 }  // namespace segslam::slam

@@ -294,6 +294,12 @@ struct TrackerOptions {
   DepthJudgementOptions depth_judgement;
   // Long-term map export: points seen in at least this many keyframes.
   int long_term_min_observations = 2;
+  // Long-term map export of the judging modes: keep the points made on instances of fixed
+  // classes (tables, screens, plants, traffic lights; core/coco.h) and not seen mostly on
+  // moveable ones, as a map of only what stays put allows (DESIGN.md: no point on a
+  // moveable object). Without, every point on an instance is left out, and an office's
+  // desks and screens with it: pass 2 then localizes on walls and floor alone.
+  bool long_term_map_keeps_fixed_instances = true;
   // The first keyframe needs this many features with depth that may enter the map (in
   // mutual mode not those on moveable instances that are not judged yet).
   int min_initial_map_features = 100;
@@ -348,8 +354,9 @@ class Tracker {
   // Step 5; returns the frame's result (timings, status, judgements).
   FrameResult UpdateMaps();
 
-  // The long-term map (DESIGN.md core step 5): background points, or every point for
-  // `include_instances` (the plain baseline). In localization mode: the loaded map as is.
+  // The long-term map (DESIGN.md core step 5): background points and, with
+  // long_term_map_keeps_fixed_instances, those of fixed-class instances; or every point
+  // for `include_instances` (the plain baseline). In localization mode: the loaded map as is.
   LongTermMapData ExportLongTermMap(bool include_instances) const;
 
   // The current map; a map reset (FrameResult::map_reset) replaces it, so a reference

@@ -214,6 +214,7 @@ struct WorkingFrame {
   std::vector<MapPoint*> rejected;      // outlier matches removed before local-map search
   std::vector<std::uint16_t> instance;  // instance id per feature, 0 = background
   std::vector<bool> excluded;           // moving / unjudged moveable: not for fine pose or map
+  std::vector<bool> on_moveable;        // on an instance of a moveable class
   // For a background feature, the instance whose mask lies within
   // TrackerOptions::instance_margin_px (0 = none): kept out with that instance.
   std::vector<std::uint16_t> near_instance;

@@ -68,6 +68,7 @@ const OptionRegistry<TrackerOptions>& TrackerOptionRegistry() {
       REAL(depth_judgement.max_log_odds, Above(0), "", "depth judgement: bound of the log-odds either way"),
       // Maps.
       WHOLE(long_term_min_observations, AtLeast(1), "", "keyframes that must see a point for the long-term map"),
+      SWITCH(long_term_map_keeps_fixed_instances, "long-term map of the judging modes: keep points on fixed-class instances"),
       WHOLE(min_initial_map_features, AtLeast(1), "", "features with depth the first keyframe needs"),
       WHOLE(reset_map_keyframes, AtLeast(0), "", "a lost map of at most this many keyframes is begun anew (0: never)"),
       REAL(reset_map_after_lost_s, AtLeast(0), "s", "how long a young map stays lost before it is dropped"),

@@ -1,4 +1,5 @@
-// The long-term map taken from a tracking map: background only (DESIGN.md, core step 5).
+// The long-term map taken from a tracking map: background only (DESIGN.md, core step 5),
+// or, keeping fixed instances, everything but what lies on moveable ones.
 #include "slam/map.h"
 
 #include <gtest/gtest.h>
@@ -25,8 +26,16 @@ class MapExportTest : public ::testing::Test {
     }
     return added;
   }
-  bool Exported(const MapPoint* point, bool include_instances) const {
-    const LongTermMapData data = map_.ToLongTermMap(camera_, include_instances, 2);
+  // A point on an instance of a moveable class, `moveable_sightings` of its sightings
+  // on such instances.
+  MapPoint* AddMoveablePoint(std::uint16_t instance_id, int labelled_sightings, int moveable_sightings) {
+    MapPoint* point = AddPoint(instance_id, labelled_sightings, moveable_sightings);
+    point->made_on_moveable = instance_id != 0;
+    point->moveable_sightings = moveable_sightings;
+    return point;
+  }
+  bool Exported(const MapPoint* point, bool include_instances, bool keep_fixed_instances = false) const {
+    const LongTermMapData data = map_.ToLongTermMap(camera_, include_instances, 2, keep_fixed_instances);
     for (const StoredMapPoint& stored : data.points) {
       if (stored.id == point->id) return true;
     }
@@ -66,6 +75,28 @@ TEST_F(MapExportTest, BackgroundPointSeenMostlyOnInstancesIsLeftOut) {
   EXPECT_TRUE(Exported(hidden_once, false));
   EXPECT_TRUE(Exported(never_labelled, false));
   EXPECT_TRUE(Exported(missed_walker, true));
+}
+
+// Keeping fixed instances: a desk's points stay, a chair's go, and so does a point made
+// on the desk that a person sitting at it covered in most later sightings.
+TEST_F(MapExportTest, KeepingFixedInstancesLeavesOutOnlyWhatLiesOnMoveableOnes) {
+  const MapPoint* background = AddPoint(0, 6, 0);
+  const MapPoint* desk = AddPoint(2, 6, 6);
+  const MapPoint* chair = AddMoveablePoint(7, 6, 6);
+  MapPoint* desk_under_a_sitter = AddPoint(2, 6, 6);
+  desk_under_a_sitter->moveable_sightings = 4;
+  MapPoint* desk_passed_once = AddPoint(2, 6, 6);
+  desk_passed_once->moveable_sightings = 1;
+  const MapPoint* missed_walker = AddMoveablePoint(0, 5, 4);  // made as background
+  EXPECT_TRUE(Exported(background, false, true));
+  EXPECT_TRUE(Exported(desk, false, true));
+  EXPECT_FALSE(Exported(chair, false, true));
+  EXPECT_FALSE(Exported(desk_under_a_sitter, false, true));
+  EXPECT_TRUE(Exported(desk_passed_once, false, true));
+  EXPECT_FALSE(Exported(missed_walker, false, true));
+  // Without keeping fixed instances the desk goes too.
+  EXPECT_FALSE(Exported(desk, false, false));
+  EXPECT_TRUE(Exported(chair, true, true));
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <map>
 #include <optional>
 #include <random>
 #include <tuple>
@@ -479,6 +480,40 @@ TEST(TrackerTest, MutualJudgesAMovingBoxMovingAndAStillBoxStatic) {
     const bool inside = stored.position_w.x() > 0.99 && stored.position_w.x() < 1.81 &&
                         stored.position_w.y() > -1.61 && stored.position_w.y() < -0.79 && stored.position_w.z() < 1.01;
     EXPECT_FALSE(inside) << stored.position_w.transpose();
+  }
+}
+
+// long_term_map_keeps_fixed_instances: the still box of the test above, as a desk
+// (a fixed class), is in the long-term map; as a chair (a moveable class) it is not,
+// and the sliding box never is.
+TEST(TrackerTest, LongTermMapKeepsAStillInstanceOfAFixedClassOnly) {
+  const PinholeCamera camera = TestCamera();
+  for (const bool still_box_moveable : {false, true}) {
+    SCOPED_TRACE(::testing::Message() << "still box moveable: " << still_box_moveable);
+    TrackerOptions options = StartingAt(HandHeldPathPose(0));
+    options.long_term_map_keeps_fixed_instances = true;
+    Tracker tracker(camera, options);
+    FrameInstances instances;
+    instances.moveable_ids = {1};
+    if (still_box_moveable) instances.moveable_ids.insert(2);
+    for (int i = 0; i < 40; ++i) {
+      const auto rendered = RenderSlidingAndStillBox(camera, i);
+      instances.ids = rendered.instance_ids;
+      ASSERT_TRUE(TrackJudging(tracker, rendered.frame, instances).localized()) << "frame " << i;
+    }
+    std::map<std::uint64_t, std::uint16_t> instance_of;
+    for (const auto& point : tracker.map().points()) instance_of[point->id] = point->instance_id;
+    int still_box_points = 0, sliding_box_points = 0;
+    for (const StoredMapPoint& stored : tracker.ExportLongTermMap(false).points) {
+      still_box_points += instance_of[stored.id] == 2;
+      sliding_box_points += instance_of[stored.id] == 1;
+    }
+    EXPECT_EQ(sliding_box_points, 0);
+    if (still_box_moveable) {
+      EXPECT_EQ(still_box_points, 0);
+    } else {
+      EXPECT_GE(still_box_points, 20);
+    }
   }
 }
 
