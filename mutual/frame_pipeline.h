@@ -96,7 +96,8 @@ class FramePipeline {
 
   // The long-term map (DESIGN.md core step 5) as the mode keeps it: plain knows no
   // instances, so everything it mapped; mask-moveable never mapped a moveable object;
-  // mutual and the oracle keep the background only.
+  // mutual and the oracle keep the background and the fixed-class instances, no point on
+  // a moveable one (TrackerOptions::long_term_map_keeps_fixed_instances).
   slam::LongTermMapData ExportLongTermMap() const;
 
   const slam::Tracker& tracker() const { return tracker_; }
