@@ -59,6 +59,8 @@ BenchSettings BenchSettings::FromYaml(const YAML::Node& bench, const std::string
         AppendOptionAssignments(value, "", origin + ": bench.refiner", &settings.refiner);
       } else if (key == "tracker") {
         AppendOptionAssignments(value, "", origin + ": bench.tracker", &settings.tracker);
+      } else if (key == "feature_jitter") {
+        settings.feature_jitter = value.as<int>();
       } else if (key == "static_twin") {
         if (!value.IsScalar() || !YAML::convert<bool>::decode(value, settings.static_twin)) {
           throw Error(origin + ": bench.static_twin: expected true or false, got '" +
@@ -66,7 +68,8 @@ BenchSettings BenchSettings::FromYaml(const YAML::Node& bench, const std::string
         }
       } else {
         throw Error(origin + ": unknown key 'bench." + key +
-                    "' (known: modes, repeats, segmenter, segmenter_strength, seed, refiner, tracker, static_twin)");
+                    "' (known: modes, repeats, segmenter, segmenter_strength, seed, refiner, tracker, static_twin, "
+                    "feature_jitter)");
       }
     } catch (const YAML::Exception& e) {
       throw Error(origin + ": bench." + key + ": " + e.msg);
@@ -106,12 +109,32 @@ std::string BenchSettings::Check() const {
       return std::string("refiner: ") + e.what();
     }
   }
+  int budget = 0;
   try {
-    TrackerOverrides();
+    budget = TrackerOverrides().orb.max_features;
   } catch (const Error& e) {
     return std::string("tracker: ") + e.what();
   }
+  if (feature_jitter < 0) return fmt::format("feature_jitter: must be >= 0 (got {})", feature_jitter);
+  const int lowest_shift = -((repeats - 1) / 2);  // FeatureBudgetShift's most negative over the repeats
+  if (feature_jitter > 0 && budget + lowest_shift * static_cast<long long>(feature_jitter) < 1) {
+    return fmt::format("feature_jitter: {} over {} repeats takes the feature budget of {} under 1", feature_jitter,
+                       repeats, budget);
+  }
   return "";
+}
+
+int BenchSettings::FeatureBudgetShift(int repeat) { return repeat % 2 == 1 ? (repeat + 1) / 2 : -(repeat / 2); }
+
+int BenchSettings::FeatureBudgetFor(int repeat) const {
+  return TrackerOverrides().orb.max_features + FeatureBudgetShift(repeat) * feature_jitter;
+}
+
+std::vector<std::string> BenchSettings::TrackerAssignmentsFor(int repeat) const {
+  std::vector<std::string> assignments = tracker;
+  // Last, so that it overrides a budget set in `tracker`, from which it is counted.
+  if (feature_jitter > 0) assignments.push_back(fmt::format("orb.max_features={}", FeatureBudgetFor(repeat)));
+  return assignments;
 }
 
 slam::TrackerOptions BenchSettings::TrackerOverrides() const {

@@ -40,6 +40,13 @@ struct BenchSettings {
   // nothing moving), the yardstick of how much error the traffic adds: results and
   // `expect:` get MODE.traffic_error_removed (harness/scenario_expectations.h).
   bool static_twin = false;
+  // Repeat r runs every mode (and the static twin) with the ORB feature budget shifted
+  // by FeatureBudgetShift(r) x feature_jitter features: 0, +1, -1, +2, -2, ... A run of
+  // SLAM is chaotic: a feature more or less changes which keyframes are made, and one
+  // run's ATE moves by about a tenth (docs/metrics.md), so without a spread of its own a
+  // deterministic mode, plain above all, is one draw. With a jitter every mode runs
+  // `repeats` times and the medians are over those runs. 0 = off.
+  int feature_jitter = 0;
 
   // Throws segslam::Error naming `origin` and the key on unknown keys or bad values.
   static BenchSettings FromYaml(const YAML::Node& bench, const std::string& origin);
@@ -50,8 +57,18 @@ struct BenchSettings {
   // segmenter's (or the ground truth's, segmenter gt). `mode` must be one of `modes`'s
   // names (Check()).
   RunConfig RunConfigFor(const std::string& mode, std::uint64_t seed) const;
-  // Without a simulated segmenter SLAM is deterministic: one run says everything.
-  bool ModeIsDeterministic(const std::string& mode) const { return RunConfigFor(mode, seed).IsDeterministic(); }
+  // Without a simulated segmenter or a feature jitter SLAM is deterministic: one run says
+  // everything.
+  bool ModeIsDeterministic(const std::string& mode) const {
+    return feature_jitter == 0 && RunConfigFor(mode, seed).IsDeterministic();
+  }
+  // 0, +1, -1, +2, -2, ... for repeat 0, 1, 2, 3, 4, ...
+  static int FeatureBudgetShift(int repeat);
+  // The ORB feature budget of repeat `repeat` (0-based): the tracker's, jittered.
+  int FeatureBudgetFor(int repeat) const;
+  // The tracker's "name=value" overrides of repeat `repeat`: `tracker`, and the jittered
+  // feature budget when feature_jitter is on.
+  std::vector<std::string> TrackerAssignmentsFor(int repeat) const;
   // The segmenter as reports name it: "gt", "fcis-like", "fcis-like@2".
   std::string SegmenterLabel() const;
   // The refinement options of the mutual loop: the defaults with `refiner` set.

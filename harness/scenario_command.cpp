@@ -128,7 +128,7 @@ class RepeatRunner {
     DatasetRunOptions options;
     options.run = bench_.RunConfigFor(run.mode, run.seed);
     if (options.run.RefinesMasks()) options.refiner_options = bench_.refiner;
-    options.tracker_options = bench_.tracker;
+    options.tracker_options = bench_.TrackerAssignmentsFor(run.repeat);
     std::optional<ProgressBar> bar;  // this run's, with one job
     std::string bar_pass;
     int pass1_frames = 0;
@@ -454,9 +454,13 @@ ScenarioReport RunScenarioToReport(const ScenarioRunRequest& args) {
     EnsureDataset(twin, twin_dataset, args, backend, cancel);
     BenchSettings twin_bench = bench;
     twin_bench.modes = {"plain"};
-    twin_bench.repeats = 1;  // plain is deterministic
+    // Plain is deterministic unless the feature budget is jittered; then the twin runs
+    // with each repeat's budget too.
+    if (bench.feature_jitter == 0) twin_bench.repeats = 1;
     report.static_twin_runs = PlanRuns(twin_bench);
-    for (RepeatRun& run : report.static_twin_runs) run.run_dir = (fs::path("runs") / kStaticTwinPlain / "once").string();
+    for (RepeatRun& run : report.static_twin_runs) {
+      run.run_dir = (fs::path("runs") / kStaticTwinPlain / fs::path(run.run_dir).filename()).string();
+    }
     RepeatRunner(&report.static_twin_runs, twin_bench, twin_dataset, report_dir, args, cancel).RunAll();
     if (cancel->load()) throw Error("scenario run: interrupted; no report written to " + report_dir.string());
     report.static_twin_dataset_dir = twin_dataset.string();

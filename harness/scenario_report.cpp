@@ -258,13 +258,16 @@ Table MovingBreakdownTable(const ScenarioReport& report) {
 }
 
 Table RunsTable(const ScenarioReport& report) {
-  Table runs{"Every run", "Seeds are the simulated segmenter's; a deterministic mode ran once.",
-             {"mode", "repeat", "seed", "pass1 ATE rmse [m]", "pass1 localized [%]", "pass2 ATE rmse [m]",
-              "pass2 localized [%]", "seconds", "outputs"},
+  Table runs{"Every run",
+             "Seeds are the simulated segmenter's; a deterministic mode ran once. ORB features: the "
+             "tracker's feature budget (repeats differ in it when bench.feature_jitter is set).",
+             {"mode", "repeat", "seed", "ORB features", "pass1 ATE rmse [m]", "pass1 localized [%]",
+              "pass2 ATE rmse [m]", "pass2 localized [%]", "seconds", "outputs"},
              {}};
   for (const RepeatRun& run : report.runs) {
     std::vector<std::string> row = {run.mode, std::to_string(run.repeat),
-                                    report.bench.ModeIsDeterministic(run.mode) ? "-" : std::to_string(run.seed)};
+                                    report.bench.ModeIsDeterministic(run.mode) ? "-" : std::to_string(run.seed),
+                                    std::to_string(report.bench.FeatureBudgetFor(run.repeat))};
     for (const auto& pass : kScenarioPasses) {
       double ate = kNaN, localized = kNaN;
       for (const PassEvaluation& p : run.evaluation.passes) {
@@ -336,7 +339,7 @@ nlohmann::json ScenarioReport::ToJson() const {
       {"bench",
        {{"modes", bench.modes}, {"repeats", bench.repeats}, {"segmenter", bench.segmenter},
         {"segmenter_strength", bench.segmenter_strength}, {"seed", bench.seed}, {"refiner", bench.refiner},
-        {"tracker", bench.tracker}, {"static_twin", bench.static_twin}}},
+        {"tracker", bench.tracker}, {"static_twin", bench.static_twin}, {"feature_jitter", bench.feature_jitter}}},
       {"options",
        {{"tracker", slam::TrackerOptionRegistry().ToJson(bench.TrackerOverrides())},
         {"refiner", seg::RefinerOptionRegistry().ToJson(bench.LoopRefinerOptions())}}},
@@ -352,6 +355,7 @@ nlohmann::json ScenarioReport::ToJson() const {
   for (const RepeatRun& run : runs) {
     nlohmann::json entry = {{"mode", run.mode},       {"repeat", run.repeat},
                             {"seed", bench.ModeIsDeterministic(run.mode) ? nlohmann::json(nullptr) : nlohmann::json(run.seed)},
+                            {"orb_max_features", bench.FeatureBudgetFor(run.repeat)},
                             {"run_dir", run.run_dir}, {"seconds", run.seconds},
                             {"evaluation", run.evaluation.ToJson()}};
     json["runs"].push_back(entry);
@@ -367,7 +371,9 @@ nlohmann::json ScenarioReport::ToJson() const {
   if (!static_twin_runs.empty()) {
     nlohmann::json twin = {{"dataset", static_twin_dataset_dir}, {"runs", nlohmann::json::array()}};
     for (const RepeatRun& run : static_twin_runs) {
-      twin["runs"].push_back({{"mode", run.mode}, {"run_dir", run.run_dir}, {"seconds", run.seconds},
+      twin["runs"].push_back({{"mode", run.mode}, {"repeat", run.repeat},
+                              {"orb_max_features", bench.FeatureBudgetFor(run.repeat)},
+                              {"run_dir", run.run_dir}, {"seconds", run.seconds},
                               {"evaluation", run.evaluation.ToJson()}});
     }
     for (const auto& pass : kScenarioPasses) {

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -332,6 +333,43 @@ TEST_F(ScenarioCliTest, StaticTwinGivesEachModesShareOfTheTrafficsErrorRemoved) 
   EXPECT_NE(refused.stderr_text.find("needs the static twin (bench: {static_twin: true}"), std::string::npos)
       << refused.stderr_text;
   EXPECT_FALSE(fs::exists(dir_ / "cache2"));
+}
+
+// With bench.feature_jitter, plain, the oracle and the static twin run every repeat too,
+// each with its repeat's feature budget, and the medians are over those runs.
+TEST_F(ScenarioCliTest, FeatureJitterRepeatsEveryModeAndTheTwinWithTheirBudgets) {
+  const fs::path scenario = WriteScenario("jitter", "bench: {segmenter: gt, static_twin: true, feature_jitter: 50}\n");
+  const fs::path report = dir_ / "report";
+  const CommandOutput result = Run("scenario run " + scenario.string() +
+                                   " --frames 12 --modes plain,oracle --repeats 3 -q --cache " +
+                                   (dir_ / "cache").string() + " --out " + report.string());
+  ASSERT_EQ(result.exit_code, 0) << result.stdout_text << result.stderr_text;
+  const nlohmann::json results = nlohmann::json::parse(ReadText(report / "results.json"));
+  EXPECT_EQ(results["bench"]["feature_jitter"], 50);
+  const std::vector<int> budgets = {1000, 1050, 950};
+  for (const char* mode : {"plain", "oracle"}) {
+    SCOPED_TRACE(mode);
+    std::vector<int> seen;
+    std::vector<std::string> dirs;
+    for (const nlohmann::json& run : results["runs"]) {
+      if (run["mode"] != mode) continue;
+      seen.push_back(run["orb_max_features"]);
+      dirs.push_back(run["run_dir"]);
+      EXPECT_TRUE(fs::exists(report / run["run_dir"].get<std::string>() / "pass2" / "trajectory.txt"));
+    }
+    EXPECT_EQ(seen, budgets);
+    EXPECT_EQ(std::set<std::string>(dirs.begin(), dirs.end()).size(), 3u);
+    EXPECT_EQ(results["summary"]["pass1"][mode]["ate_rmse_m"]["runs"], 3);
+  }
+  const nlohmann::json& twin_runs = results["static_twin"]["runs"];
+  ASSERT_EQ(twin_runs.size(), 3u);
+  for (std::size_t r = 0; r < 3; ++r) EXPECT_EQ(twin_runs[r]["orb_max_features"], budgets[r]);
+  EXPECT_EQ(results["summary"]["pass1"]["plain-static-twin"]["ate_rmse_m"]["runs"], 3);
+  // The budget reaches the tracker: each run records the options it ran with.
+  const nlohmann::json last_plain =
+      nlohmann::json::parse(ReadText(report / results["runs"][2]["run_dir"].get<std::string>() / "run.json"));
+  ASSERT_EQ(results["runs"][2]["mode"], "plain");
+  EXPECT_EQ(last_plain["options"]["tracker"]["orb.max_features"], 950);
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "core/error.h"
+#include "slam/tracker_options.h"
 
 namespace segslam::harness {
 namespace {
@@ -270,6 +271,57 @@ TEST(ScenarioReportTest, TrackerOptionsTakeNestedNamesAndAreChecked) {
       EXPECT_NE(std::string(e.what()).find("tracker"), std::string::npos) << e.what();
     }
   }
+}
+
+// bench.feature_jitter gives repeat r the feature budget shifted by 0, +1, -1, +2, ...
+// jitters; every mode then runs each repeat, plain and the oracle too.
+TEST(ScenarioReportTest, FeatureJitterShiftsEachRepeatsBudgetAndMakesEveryModeRepeat) {
+  EXPECT_EQ(BenchSettings::FeatureBudgetShift(0), 0);
+  EXPECT_EQ(BenchSettings::FeatureBudgetShift(1), 1);
+  EXPECT_EQ(BenchSettings::FeatureBudgetShift(2), -1);
+  EXPECT_EQ(BenchSettings::FeatureBudgetShift(3), 2);
+  EXPECT_EQ(BenchSettings::FeatureBudgetShift(4), -2);
+
+  const BenchSettings off = BenchSettings::FromYaml(YAML::Load("{modes: [plain, mutual, oracle]}"), "s.yaml");
+  EXPECT_EQ(off.feature_jitter, 0);
+  EXPECT_TRUE(off.ModeIsDeterministic("plain"));
+  EXPECT_EQ(off.FeatureBudgetFor(3), slam::TrackerOptions().orb.max_features);
+  EXPECT_EQ(off.TrackerAssignmentsFor(3), off.tracker);
+
+  const BenchSettings jittered = BenchSettings::FromYaml(
+      YAML::Load("{modes: [plain, mutual, oracle], repeats: 5, feature_jitter: 10, tracker: {orb: {max_features: 1500}}}"),
+      "s.yaml");
+  for (const char* mode : {"plain", "mutual", "oracle"}) EXPECT_FALSE(jittered.ModeIsDeterministic(mode)) << mode;
+  std::vector<int> budgets;
+  for (int repeat = 0; repeat < 5; ++repeat) budgets.push_back(jittered.FeatureBudgetFor(repeat));
+  EXPECT_EQ(budgets, (std::vector<int>{1500, 1510, 1490, 1520, 1480}));
+  // The jittered budget comes last, so it overrides the scenario's own.
+  EXPECT_EQ(jittered.TrackerAssignmentsFor(4), (std::vector<std::string>{"orb.max_features=1500", "orb.max_features=1480"}));
+  slam::TrackerOptions options;
+  for (const std::string& assignment : jittered.TrackerAssignmentsFor(4)) slam::SetTrackerOption(&options, assignment);
+  EXPECT_EQ(options.orb.max_features, 1480);
+
+  const struct {
+    const char* yaml;
+    const char* fragment;
+  } bad[] = {
+      {"{feature_jitter: -5}", "feature_jitter: must be >= 0 (got -5)"},
+      {"{feature_jitter: 600, repeats: 5}", "takes the feature budget of 1000 under 1"},
+      {"{feature_jitter: some}", "bench.feature_jitter"},
+  };
+  for (const auto& c : bad) {
+    try {
+      BenchSettings::FromYaml(YAML::Load(c.yaml), "s.yaml");
+      ADD_FAILURE() << c.yaml << ": accepted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("s.yaml: bench"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(c.fragment), std::string::npos) << e.what();
+    }
+  }
+  // Two repeats go up only; the third is the first to go down.
+  EXPECT_NO_THROW(BenchSettings::FromYaml(YAML::Load("{feature_jitter: 1000, repeats: 2}"), "s.yaml"));
+  EXPECT_NO_THROW(BenchSettings::FromYaml(YAML::Load("{feature_jitter: 999, repeats: 3}"), "s.yaml"));
+  EXPECT_THROW(BenchSettings::FromYaml(YAML::Load("{feature_jitter: 1000, repeats: 3}"), "s.yaml"), Error);
 }
 
 }  // namespace
