@@ -2,6 +2,7 @@
 // checked, and the segmenter, tracker and refiner options it gives the runs.
 #include "harness/bench_settings.h"
 
+#include <limits>
 #include <set>
 
 #include <fmt/format.h>
@@ -117,9 +118,14 @@ std::string BenchSettings::Check() const {
   }
   if (feature_jitter < 0) return fmt::format("feature_jitter: must be >= 0 (got {})", feature_jitter);
   const int lowest_shift = -((repeats - 1) / 2);  // FeatureBudgetShift's most negative over the repeats
+  const int highest_shift = repeats / 2;
   if (feature_jitter > 0 && budget + lowest_shift * static_cast<long long>(feature_jitter) < 1) {
     return fmt::format("feature_jitter: {} over {} repeats takes the feature budget of {} under 1", feature_jitter,
                        repeats, budget);
+  }
+  if (budget + highest_shift * static_cast<long long>(feature_jitter) > std::numeric_limits<int>::max()) {
+    return fmt::format("feature_jitter: {} over {} repeats takes the feature budget of {} past {}", feature_jitter,
+                       repeats, budget, std::numeric_limits<int>::max());
   }
   return "";
 }

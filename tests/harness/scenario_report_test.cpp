@@ -308,6 +308,7 @@ TEST(ScenarioReportTest, FeatureJitterShiftsEachRepeatsBudgetAndMakesEveryModeRe
       {"{feature_jitter: -5}", "feature_jitter: must be >= 0 (got -5)"},
       {"{feature_jitter: 600, repeats: 5}", "takes the feature budget of 1000 under 1"},
       {"{feature_jitter: some}", "bench.feature_jitter"},
+      {"{feature_jitter: 2147483000, repeats: 2}", "past 2147483647"},
   };
   for (const auto& c : bad) {
     try {
