@@ -154,10 +154,9 @@ bool Tracker::Impl::MotionAgainstHistory(std::uint16_t id, const std::vector<int
   return false;
 }
 
-std::uint16_t Tracker::Impl::InstanceNear(const cv::Mat& ids, int x, int y) const {
+std::uint16_t Tracker::Impl::InstanceNear(const cv::Mat& ids, int x, int y, int margin) const {
   // The nearest instance pixel within the margin (the first in row order among equals,
   // so the answer depends on nothing but the mask).
-  const int margin = options.instance_margin_px;
   std::uint16_t nearest = 0;
   int nearest_d2 = margin * margin + 1;
   for (int v = std::max(0, y - margin); v <= std::min(camera.height - 1, y + margin); ++v) {
@@ -182,7 +181,11 @@ std::map<std::uint16_t, std::vector<int>> Tracker::Impl::LabelFeatures(const cv:
     const int x = std::clamp(static_cast<int>(std::lround(kp.pt.x)), 0, camera.width - 1);
     const int y = std::clamp(static_cast<int>(std::lround(kp.pt.y)), 0, camera.height - 1);
     const std::uint16_t id = ids.at<std::uint16_t>(y, x);
-    current.near_instance[i] = id == 0 && options.instance_margin_px > 0 ? InstanceNear(ids, x, y) : 0;
+    int margin_px = options.instance_margin_px;
+    if (options.instance_margin_scales_with_level) {
+      margin_px = static_cast<int>(std::lround(margin_px * extractor.scale_factors()[static_cast<size_t>(kp.octave)]));
+    }
+    current.near_instance[i] = id == 0 && margin_px > 0 ? InstanceNear(ids, x, y, margin_px) : 0;
     current.instance[i] = id;
     if (id != 0) features_of[id].push_back(static_cast<int>(i));
   }

@@ -44,6 +44,7 @@ std::vector<FeatureRecord> Tracker::Impl::FeatureRecords() const {
   for (size_t i = 0; i < current.features.size(); ++i) {
     FeatureRecord record;
     record.pixel = current.features.keypoints[i].pt;
+    record.level = current.features.keypoints[i].octave;
     record.instance_id = current.instance[i];
     if (current.excluded[i] && record.instance_id == 0) record.instance_id = current.near_instance[i];
     if (current.excluded[i]) {
@@ -144,7 +145,8 @@ void Tracker::DropMoveableFeatures(const FrameInstances& instances) {
                                                             std::clamp(pixel.x, 0, camera_.width - 1));
     if (id != 0 && instances.moveable_ids.count(id) > 0) {
       if (options_.record_features) {
-        s.dropped_moveable_records.push_back({all.keypoints[i].pt, id, FeatureKind::kDroppedMoveable});
+        s.dropped_moveable_records.push_back(
+            {all.keypoints[i].pt, all.keypoints[i].octave, id, FeatureKind::kDroppedMoveable});
       }
       continue;
     }

@@ -86,6 +86,7 @@ std::string ToString(FeatureKind kind);
 
 struct FeatureRecord {
   cv::Point2f pixel;              // keypoint position (u, v) in level-0 pixels
+  int level = 0;                  // pyramid level the keypoint was found at
   // Instance under the keypoint as the step that used masks saw it: 0 = background, or no
   // mask consulted (plain mode; features kept by mask-moveable).
   std::uint16_t instance_id = 0;
@@ -264,6 +265,11 @@ struct TrackerOptions {
   // outline moves with the object, yet its keypoint often falls just outside the mask
   // (figures: docs/tuning.md, "The tracker").
   int instance_margin_px = 8;
+  // Whether instance_margin_px is counted in pixels of the feature's pyramid level
+  // (instance_margin_px times the level's scale, in the image's pixels): a feature found
+  // at a coarser level is a corner, and has a descriptor patch, that many times larger,
+  // so a mover's outline reaches into it from that much further away.
+  bool instance_margin_scales_with_level = false;
   // An instance of a class that does not move (not on the moveable shortlist: a traffic
   // light, a bench, a hydrant) is judged moving only on at least this many measured
   // points. Its few matches are often wrong in a consistent way (a traffic light's three

@@ -216,7 +216,8 @@ struct WorkingFrame {
   std::vector<bool> excluded;           // moving / unjudged moveable: not for fine pose or map
   std::vector<bool> on_moveable;        // on an instance of a moveable class
   // For a background feature, the instance whose mask lies within
-  // TrackerOptions::instance_margin_px (0 = none): kept out with that instance.
+  // TrackerOptions::instance_margin_px (scaled to the feature's level where
+  // instance_margin_scales_with_level; 0 = none): kept out with that instance.
   std::vector<std::uint16_t> near_instance;
   // The judgement from depth: each instance's interior depth samples, camera frame.
   std::map<std::uint16_t, std::vector<Eigen::Vector3d>> depth_samples_c;
@@ -406,8 +407,8 @@ struct Tracker::Impl {
   // measures of each instance's motion; the verdict on that measurement; what the
   // instance's recent frames add to it; and what a verdict keeps out of the pose and map.
 
-  // The instance nearest to pixel (x, y) within TrackerOptions::instance_margin_px; 0 = none.
-  std::uint16_t InstanceNear(const cv::Mat& ids, int x, int y) const;
+  // The instance nearest to pixel (x, y) within margin_px; 0 = none.
+  std::uint16_t InstanceNear(const cv::Mat& ids, int x, int y, int margin_px) const;
   std::map<std::uint16_t, std::vector<int>> LabelFeatures(const cv::Mat& ids);
   bool MeasureInstanceMotion(std::uint16_t id, const std::vector<int>& features,
                              const Eigen::Isometry3d& T_wc, bool trust_young_points,

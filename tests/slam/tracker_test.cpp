@@ -519,20 +519,27 @@ TEST(TrackerTest, LongTermMapKeepsAStillInstanceOfAFixedClassOnly) {
 
 // A background feature within instance_margin_px of the mask of an instance kept out
 // (here the sliding box, not judged in its first frames) is kept out with it and recorded
-// as the box's; one farther out stays in. The box's mask is shrunk by 4 px, so the
-// corners of its outline lie outside it, and each recorded feature is checked against its
-// exact distance to the mask.
+// as the box's; one farther out stays in. With instance_margin_scales_with_level the
+// margin is instance_margin_px times the scale of the feature's pyramid level. The box's
+// mask is shrunk by 4 px, so the corners of its outline lie outside it, and each recorded
+// feature is checked against its exact distance to the mask.
 TEST(TrackerTest, BackgroundJustOutsideAKeptOutMaskIsKeptOutWithIt) {
   const PinholeCamera camera = TestCamera();
-  for (const int margin : {8, 0}) {
-    SCOPED_TRACE(::testing::Message() << "instance_margin_px " << margin);
+  struct Margin {
+    int px;
+    bool scales_with_level;
+  };
+  for (const Margin margin : {Margin{8, false}, Margin{0, false}, Margin{6, true}}) {
+    SCOPED_TRACE(::testing::Message() << "instance_margin_px " << margin.px << ", scales with level "
+                                      << margin.scales_with_level);
     TrackerOptions options = StartingAt(HandHeldPathPose(0));
     options.record_features = true;
-    options.instance_margin_px = margin;
+    options.instance_margin_px = margin.px;
+    options.instance_margin_scales_with_level = margin.scales_with_level;
     Tracker tracker(camera, options);
     FrameInstances instances;
     instances.moveable_ids = {1};
-    int near_outside = 0, far_outside = 0;
+    int near_outside = 0, far_outside = 0, coarse_level_band = 0;
     for (int i = 0; i < 3; ++i) {
       const RenderedFrame rendered = RenderSlidingAndStillBox(camera, i);
       const cv::Mat box = rendered.instance_ids == 1;
@@ -546,12 +553,15 @@ TEST(TrackerTest, BackgroundJustOutsideAKeptOutMaskIsKeptOutWithIt) {
       ASSERT_EQ(result.feature_records.size(), static_cast<size_t>(result.num_features)) << "frame " << i;
       for (const InstanceJudgement& judgement : result.instances) EXPECT_FALSE(judgement.judged) << "frame " << i;
       for (const FeatureRecord& record : result.feature_records) {
+        const double scale = margin.scales_with_level ? std::pow(options.orb.scale_factor, record.level) : 1.0;
+        const double margin_px = std::round(margin.px * scale);
         const int x = static_cast<int>(std::lround(record.pixel.x));
         const int y = static_cast<int>(std::lround(record.pixel.y));
         const float d = distance_px.at<float>(y, x);
         const bool kept_out = record.kind == FeatureKind::kDroppedMoveable;
-        if (d <= margin) {
+        if (d <= margin_px) {
           near_outside += d > 0;
+          coarse_level_band += d > margin.px;
           EXPECT_EQ(record.instance_id, 1) << d << " px outside the mask at " << record.pixel;
           EXPECT_TRUE(kept_out) << d << " px outside the mask at " << record.pixel;
         } else {
@@ -561,8 +571,12 @@ TEST(TrackerTest, BackgroundJustOutsideAKeptOutMaskIsKeptOutWithIt) {
         }
       }
     }
-    // The box's outline gives corners in the band, so both rules were exercised.
-    EXPECT_GT(margin > 0 ? near_outside : far_outside, 10);
+    // The box's outline gives corners in the band, so both rules were exercised; with the
+    // margin scaled, features of coarser levels were kept out beyond the level-0 margin.
+    EXPECT_GT(margin.px > 0 ? near_outside : far_outside, 10);
+    if (margin.scales_with_level) {
+      EXPECT_GT(coarse_level_band, 3);
+    }
   }
 }
 
