@@ -307,7 +307,10 @@ std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& ins
       }
     }
     s.KeepOutOfPoseAndMap(judgement, features);
-    if (s.current.excluded[static_cast<size_t>(features.front())]) s.KeepOutNearbyBackground(id);
+    if (s.current.excluded[static_cast<size_t>(features.front())] &&
+        (judgement.moving || options_.instance_margin_around_unjudged)) {
+      s.KeepOutNearbyBackground(id);
+    }
     judgements.push_back(judgement);
   }
   // Every match of a tracked frame counts, inlier of the coarse pose or not: a point made

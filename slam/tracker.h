@@ -270,6 +270,9 @@ struct TrackerOptions {
   // at a coarser level is a corner, and has a descriptor patch, that many times larger,
   // so a mover's outline reaches into it from that much further away.
   bool instance_margin_scales_with_level = false;
+  // Whether the margin also goes around instances kept out because they are not judged
+  // yet (else only around those judged moving).
+  bool instance_margin_around_unjudged = true;
   // An instance of a class that does not move (not on the moveable shortlist: a traffic
   // light, a bench, a hydrant) is judged moving only on at least this many measured
   // points. Its few matches are often wrong in a consistent way (a traffic light's three

@@ -520,7 +520,8 @@ TEST(TrackerTest, LongTermMapKeepsAStillInstanceOfAFixedClassOnly) {
 // A background feature within instance_margin_px of the mask of an instance kept out
 // (here the sliding box, not judged in its first frames) is kept out with it and recorded
 // as the box's; one farther out stays in. With instance_margin_scales_with_level the
-// margin is instance_margin_px times the scale of the feature's pyramid level. The box's
+// margin is instance_margin_px times the scale of the feature's pyramid level; without
+// instance_margin_around_unjudged there is none around the unjudged box. The box's
 // mask is shrunk by 4 px, so the corners of its outline lie outside it, and each recorded
 // feature is checked against its exact distance to the mask.
 TEST(TrackerTest, BackgroundJustOutsideAKeptOutMaskIsKeptOutWithIt) {
@@ -528,14 +529,18 @@ TEST(TrackerTest, BackgroundJustOutsideAKeptOutMaskIsKeptOutWithIt) {
   struct Margin {
     int px;
     bool scales_with_level;
+    bool around_unjudged;
   };
-  for (const Margin margin : {Margin{8, false}, Margin{0, false}, Margin{6, true}}) {
+  for (const Margin margin : {Margin{8, false, true}, Margin{0, false, true}, Margin{6, true, true},
+                              Margin{8, false, false}}) {
     SCOPED_TRACE(::testing::Message() << "instance_margin_px " << margin.px << ", scales with level "
-                                      << margin.scales_with_level);
+                                      << margin.scales_with_level << ", around unjudged " << margin.around_unjudged);
     TrackerOptions options = StartingAt(HandHeldPathPose(0));
     options.record_features = true;
     options.instance_margin_px = margin.px;
     options.instance_margin_scales_with_level = margin.scales_with_level;
+    options.instance_margin_around_unjudged = margin.around_unjudged;
+    const int level0_margin_px = margin.around_unjudged ? margin.px : 0;  // the box is never judged here
     Tracker tracker(camera, options);
     FrameInstances instances;
     instances.moveable_ids = {1};
@@ -554,14 +559,14 @@ TEST(TrackerTest, BackgroundJustOutsideAKeptOutMaskIsKeptOutWithIt) {
       for (const InstanceJudgement& judgement : result.instances) EXPECT_FALSE(judgement.judged) << "frame " << i;
       for (const FeatureRecord& record : result.feature_records) {
         const double scale = margin.scales_with_level ? std::pow(options.orb.scale_factor, record.level) : 1.0;
-        const double margin_px = std::round(margin.px * scale);
+        const double margin_px = std::round(level0_margin_px * scale);
         const int x = static_cast<int>(std::lround(record.pixel.x));
         const int y = static_cast<int>(std::lround(record.pixel.y));
         const float d = distance_px.at<float>(y, x);
         const bool kept_out = record.kind == FeatureKind::kDroppedMoveable;
         if (d <= margin_px) {
           near_outside += d > 0;
-          coarse_level_band += d > margin.px;
+          coarse_level_band += d > level0_margin_px;
           EXPECT_EQ(record.instance_id, 1) << d << " px outside the mask at " << record.pixel;
           EXPECT_TRUE(kept_out) << d << " px outside the mask at " << record.pixel;
         } else {
@@ -573,7 +578,7 @@ TEST(TrackerTest, BackgroundJustOutsideAKeptOutMaskIsKeptOutWithIt) {
     }
     // The box's outline gives corners in the band, so both rules were exercised; with the
     // margin scaled, features of coarser levels were kept out beyond the level-0 margin.
-    EXPECT_GT(margin.px > 0 ? near_outside : far_outside, 10);
+    EXPECT_GT(level0_margin_px > 0 ? near_outside : far_outside, 10);
     if (margin.scales_with_level) {
       EXPECT_GT(coarse_level_band, 3);
     }
