@@ -146,7 +146,7 @@ void Tracker::DropMoveableFeatures(const FrameInstances& instances) {
     if (id != 0 && instances.moveable_ids.count(id) > 0) {
       if (options_.record_features) {
         s.dropped_moveable_records.push_back(
-            {all.keypoints[i].pt, all.keypoints[i].octave, id, FeatureKind::kDroppedMoveable});
+            {all.keypoints[i].pt, id, FeatureKind::kDroppedMoveable, all.keypoints[i].octave});
       }
       continue;
     }

@@ -86,11 +86,11 @@ std::string ToString(FeatureKind kind);
 
 struct FeatureRecord {
   cv::Point2f pixel;              // keypoint position (u, v) in level-0 pixels
-  int level = 0;                  // pyramid level the keypoint was found at
   // Instance under the keypoint as the step that used masks saw it: 0 = background, or no
   // mask consulted (plain mode; features kept by mask-moveable).
   std::uint16_t instance_id = 0;
   FeatureKind kind = FeatureKind::kUnmatched;
+  int level = 0;  // pyramid level the keypoint was found at
 };
 
 struct FrameTimings {
@@ -271,7 +271,8 @@ struct TrackerOptions {
   // so a mover's outline reaches into it from that much further away.
   bool instance_margin_scales_with_level = false;
   // Whether the margin also goes around instances kept out because they are not judged
-  // yet (else only around those judged moving).
+  // yet, which may be moving (else only around those judged moving; in a sitting office
+  // the margin around people in a map's first frames costs background).
   bool instance_margin_around_unjudged = true;
   // An instance of a class that does not move (not on the moveable shortlist: a traffic
   // light, a bench, a hydrant) is judged moving only on at least this many measured
