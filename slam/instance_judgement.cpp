@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <opencv2/features2d.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "slam/tracker_internal.h"
 
@@ -154,14 +155,33 @@ bool Tracker::Impl::MotionAgainstHistory(std::uint16_t id, const std::vector<int
   return false;
 }
 
-std::uint16_t Tracker::Impl::InstanceNear(const cv::Mat& ids, int x, int y, int margin) const {
+std::uint16_t Tracker::Impl::InstanceNear(const cv::Mat& ids, const cv::Mat& instance_pixels_integral, int x, int y,
+                                         int margin) const {
+  // The instance pixels in the square of half-width r around (x, y), in four reads.
+  const cv::Mat& sum = instance_pixels_integral;
+  const auto any_within = [&](int r) {
+    const int u0 = std::max(0, x - r), u1 = std::min(camera.width - 1, x + r);
+    const int v0 = std::max(0, y - r), v1 = std::min(camera.height - 1, y + r);
+    return sum.at<int>(v1 + 1, u1 + 1) - sum.at<int>(v0, u1 + 1) - sum.at<int>(v1 + 1, u0) + sum.at<int>(v0, u0) != 0;
+  };
+  // Most background features have no instance pixel within the margin (a city frame's
+  // instances are a small share of it). Where one has, the smallest square holding one
+  // (half-width r) bounds the nearest pixel's distance by r * sqrt(2), so only that
+  // square is scanned, not the whole margin's (up to 109 x 109 pixels at a coarse level).
+  if (!any_within(margin)) return 0;
+  int lo = 0, hi = margin;  // any_within(hi) holds; any_within(lo) does not (the feature's own pixel is background)
+  while (hi - lo > 1) {
+    const int mid = (lo + hi) / 2;
+    (any_within(mid) ? hi : lo) = mid;
+  }
+  const int reach = std::min(margin, static_cast<int>(std::floor(hi * std::sqrt(2.0))));
   // The nearest instance pixel within the margin (the first in row order among equals,
   // so the answer depends on nothing but the mask).
   std::uint16_t nearest = 0;
   int nearest_d2 = margin * margin + 1;
-  for (int v = std::max(0, y - margin); v <= std::min(camera.height - 1, y + margin); ++v) {
+  for (int v = std::max(0, y - reach); v <= std::min(camera.height - 1, y + reach); ++v) {
     const std::uint16_t* row = ids.ptr<std::uint16_t>(v);
-    for (int u = std::max(0, x - margin); u <= std::min(camera.width - 1, x + margin); ++u) {
+    for (int u = std::max(0, x - reach); u <= std::min(camera.width - 1, x + reach); ++u) {
       const int d2 = (u - x) * (u - x) + (v - y) * (v - y);
       if (row[u] != 0 && d2 < nearest_d2) {
         nearest = row[u];
@@ -175,6 +195,11 @@ std::uint16_t Tracker::Impl::InstanceNear(const cv::Mat& ids, int x, int y, int 
 // The instance under each feature (into current.instance; for background features the
 // nearest one within the margin into current.near_instance), and each instance's features.
 std::map<std::uint16_t, std::vector<int>> Tracker::Impl::LabelFeatures(const cv::Mat& ids) {
+  cv::Mat instance_pixels_integral;
+  if (options.instance_margin_px > 0) {
+    const cv::Mat instance_pixels = ids != 0;  // 255 on instances, 0 elsewhere
+    cv::integral(instance_pixels, instance_pixels_integral, CV_32S);
+  }
   std::map<std::uint16_t, std::vector<int>> features_of;
   for (size_t i = 0; i < current.features.size(); ++i) {
     const cv::KeyPoint& kp = current.features.keypoints[i];
@@ -185,7 +210,8 @@ std::map<std::uint16_t, std::vector<int>> Tracker::Impl::LabelFeatures(const cv:
     if (options.instance_margin_scales_with_level) {
       margin_px = static_cast<int>(std::lround(margin_px * extractor.scale_factors()[static_cast<size_t>(kp.octave)]));
     }
-    current.near_instance[i] = id == 0 && margin_px > 0 ? InstanceNear(ids, x, y, margin_px) : 0;
+    current.near_instance[i] =
+        id == 0 && margin_px > 0 ? InstanceNear(ids, instance_pixels_integral, x, y, margin_px) : 0;
     current.instance[i] = id;
     if (id != 0) features_of[id].push_back(static_cast<int>(i));
   }

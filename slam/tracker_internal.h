@@ -407,8 +407,10 @@ struct Tracker::Impl {
   // measures of each instance's motion; the verdict on that measurement; what the
   // instance's recent frames add to it; and what a verdict keeps out of the pose and map.
 
-  // The instance nearest to pixel (x, y) within margin_px; 0 = none.
-  std::uint16_t InstanceNear(const cv::Mat& ids, int x, int y, int margin_px) const;
+  // The instance nearest to pixel (x, y) within margin_px; 0 = none. The integral
+  // image (CV_32S, one row and column more than ids) sums ids != 0.
+  std::uint16_t InstanceNear(const cv::Mat& ids, const cv::Mat& instance_pixels_integral, int x, int y,
+                             int margin_px) const;
   std::map<std::uint16_t, std::vector<int>> LabelFeatures(const cv::Mat& ids);
   bool MeasureInstanceMotion(std::uint16_t id, const std::vector<int>& features,
                              const Eigen::Isometry3d& T_wc, bool trust_young_points,
