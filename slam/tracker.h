@@ -264,15 +264,18 @@ struct TrackerOptions {
   // oracle; mask-moveable drops what lies on the masks): a corner on a moving object's
   // outline moves with the object, yet its keypoint often falls just outside the mask
   // (figures: docs/tuning.md, "The tracker").
-  int instance_margin_px = 8;
+  int instance_margin_px = 15;
   // Whether instance_margin_px is counted in pixels of the feature's pyramid level
   // (instance_margin_px times the level's scale, in the image's pixels): a feature found
   // at a coarser level is a corner, and has a descriptor patch, that many times larger,
-  // so a mover's outline reaches into it from that much further away.
-  bool instance_margin_scales_with_level = false;
+  // so a mover's outline reaches into it from that much further away. 15 px at the
+  // finest level is about an ORB patch's half-width at every level (15 to 54 px).
+  bool instance_margin_scales_with_level = true;
   // Whether the margin also goes around instances kept out because they are not judged
-  // yet, which may be moving (else only around those judged moving; in a sitting office
-  // the margin around people in a map's first frames costs background).
+  // yet, which may be moving (else only around those judged moving). Without it a mover
+  // that has just come into view bends the route through its outline (a held-out
+  // boulevard world lost most of its gain); with it a sitting office loses background
+  // near people in a map's first frames.
   bool instance_margin_around_unjudged = true;
   // An instance of a class that does not move (not on the moveable shortlist: a traffic
   // light, a bench, a hydrant) is judged moving only on at least this many measured

@@ -319,7 +319,11 @@ TEST(FeatureRecordTest, MutualRecordsEveryFeatureOnceWithAConsistentKind) {
       if (under != 0 || record.instance_id == 0) {
         ASSERT_EQ(record.instance_id, under);
       } else {
-        const int margin = slam::TrackerOptions().instance_margin_px;
+        const slam::TrackerOptions defaults;
+        const double level_scale = defaults.instance_margin_scales_with_level
+                                       ? std::pow(static_cast<double>(defaults.orb.scale_factor), record.level)
+                                       : 1.0;
+        const int margin = static_cast<int>(std::lround(defaults.instance_margin_px * level_scale));
         const cv::Rect near = cv::Rect(pixel.x - margin, pixel.y - margin, 2 * margin + 1, 2 * margin + 1) &
                               cv::Rect(0, 0, rendered.instance_ids.cols, rendered.instance_ids.rows);
         ASSERT_GT(cv::countNonZero(rendered.instance_ids(near) == record.instance_id), 0)

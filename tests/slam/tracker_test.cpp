@@ -931,7 +931,10 @@ TEST(TrackerTest, ObjectFillingTheViewThatStartsToMoveIsJudgedMovingAndLeftOutOf
   }
   EXPECT_GE(judged_while_moving, 15);
   EXPECT_GE(moving_while_moving, 0.9 * judged_while_moving);
-  EXPECT_LT(worst_m, 0.025);
+  // Dragged along, the pose would be off by the box's travel (0.2 to 0.6 m here). Left
+  // out, what remains is the room's own noise, larger for the fewer room features that
+  // the margin around the box leaves (8 px: 18 mm at worst; 15 px by level: 27 mm).
+  EXPECT_LT(worst_m, 0.035);
 }
 
 // A camera that starts at speed (15 m/s: half a metre a frame, as a city camera at 15 Hz
