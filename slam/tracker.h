@@ -272,10 +272,10 @@ struct TrackerOptions {
   // finest level is about an ORB patch's half-width at every level (15 to 54 px).
   bool instance_margin_scales_with_level = true;
   // Whether the margin also goes around instances kept out because they are not judged
-  // yet, which may be moving (else only around those judged moving). Without it a mover
-  // that has just come into view bends the route through its outline (a held-out
-  // boulevard world lost most of its gain); with it a sitting office loses background
-  // near people in a map's first frames.
+  // yet, which may be moving (else only around those judged moving). Without it the
+  // outline of a mover that has just come into view, not judged yet, enters the pose;
+  // with it a sitting office loses background near people in a map's first frames
+  // (figures: docs/results.md, "The wider margin as the default").
   bool instance_margin_around_unjudged = true;
   // An instance of a class that does not move (not on the moveable shortlist: a traffic
   // light, a bench, a hydrant) is judged moving only on at least this many measured
