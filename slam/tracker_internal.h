@@ -458,6 +458,7 @@ struct Tracker::Impl {
   // ------------------------------------------- mapping (local_mapping.cpp)
 
   bool NeedNewKeyframe() const;
+  int UnmappedOnInstancesLetIn() const;
   void CreateKeyframe();
   void CullRecentPoints(const Keyframe* keyframe);
   std::vector<Keyframe*> LocalWindow() const;
