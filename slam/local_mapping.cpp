@@ -1,7 +1,6 @@
 // The mapping side of the tracker: when a frame becomes a keyframe, the points it adds,
 // the culling of spurious new points, and local bundle adjustment over the newest
 // keyframes (run in line, so results are deterministic).
-#include <algorithm>
 #include <cmath>
 #include <set>
 
@@ -33,25 +32,7 @@ bool Tracker::Impl::NeedNewKeyframe() const {
   }
   const bool need_close = tracked_close < 100 && untracked_close > 70;
   const bool few_tracked = inliers < options.keyframe_tracked_ratio * reference_points;
-  const bool let_in_unmapped = options.keyframe_when_kept_out_instances_let_in &&
-                               UnmappedOnInstancesLetIn() > (1 - options.keyframe_tracked_ratio) * reference_points;
-  return (few_tracked || need_close || let_in_unmapped) && inliers > 15;
-}
-
-// The features with depth that the map could hold and has no point for, on instances
-// (or the background within their margin) that the reference keyframe kept out.
-int Tracker::Impl::UnmappedOnInstancesLetIn() const {
-  const std::vector<std::uint16_t>& kept_out = reference_keyframe->kept_out_instances;
-  if (kept_out.empty()) return 0;
-  int count = 0;
-  for (size_t i = 0; i < current.features.size(); ++i) {
-    if (current.excluded[i] || (current.points[i] != nullptr && !current.outlier[i])) continue;
-    const float depth = current.features.depth_m[i];
-    if (!(depth > 0) || depth > options.max_point_depth_m) continue;
-    const std::uint16_t id = current.instance[i] != 0 ? current.instance[i] : current.near_instance[i];
-    if (id != 0 && std::binary_search(kept_out.begin(), kept_out.end(), id)) ++count;
-  }
-  return count;
+  return (few_tracked || need_close) && inliers > 15;
 }
 
 void Tracker::Impl::CreateKeyframe() {
@@ -62,14 +43,6 @@ void Tracker::Impl::CreateKeyframe() {
   owned->T_cw = current.T_cw;
   owned->features = current.features;
   owned->points.assign(current.features.size(), nullptr);
-  for (size_t i = 0; i < current.features.size(); ++i) {
-    if (!current.excluded[i]) continue;
-    const std::uint16_t id = current.instance[i] != 0 ? current.instance[i] : current.near_instance[i];
-    if (id != 0) owned->kept_out_instances.push_back(id);
-  }
-  std::sort(owned->kept_out_instances.begin(), owned->kept_out_instances.end());
-  owned->kept_out_instances.erase(std::unique(owned->kept_out_instances.begin(), owned->kept_out_instances.end()),
-                                  owned->kept_out_instances.end());
   Keyframe* keyframe = map->AddKeyframe(std::move(owned));
 
   for (size_t i = 0; i < current.points.size(); ++i) {

@@ -88,9 +88,6 @@ struct Keyframe {
   Eigen::Isometry3d T_cw = Eigen::Isometry3d::Identity();
   FrameFeatures features;
   std::vector<MapPoint*> points;  // per keypoint; nullptr = none
-  // Instances whose features (and the background within their margin) were kept out of
-  // the map when the keyframe was made, sorted.
-  std::vector<std::uint16_t> kept_out_instances;
   bool bad = false;
 
   Eigen::Isometry3d T_wc() const { return T_cw.inverse(); }

@@ -235,12 +235,6 @@ struct TrackerOptions {
   // (and more than 15 are: ORB-SLAM2's frame-count rules only ever add to these, with
   // its mapping thread idle, so none is needed here).
   double keyframe_tracked_ratio = 0.75;
-  // Also a new keyframe when the features on instances that the reference keyframe kept
-  // out (not judged yet, or moving then) are let in now and as many of them as
-  // 1 - keyframe_tracked_ratio of the reference's points have no map point: a map begun
-  // while the people and furniture were not judged holds no point on them, and the test
-  // above, counting against that sparser keyframe, would fire late.
-  bool keyframe_when_kept_out_instances_let_in = true;
   // Depth under which a point counts as "close" (accurately measured); 0 = take the
   // median feature depth of the first frame, clamped to [3, 25] m.
   double close_depth_m = 0;

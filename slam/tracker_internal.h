@@ -458,7 +458,6 @@ struct Tracker::Impl {
   // ------------------------------------------- mapping (local_mapping.cpp)
 
   bool NeedNewKeyframe() const;
-  int UnmappedOnInstancesLetIn() const;
   void CreateKeyframe();
   void CullRecentPoints(const Keyframe* keyframe);
   std::vector<Keyframe*> LocalWindow() const;

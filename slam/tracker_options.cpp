@@ -40,7 +40,6 @@ const OptionRegistry<TrackerOptions>& TrackerOptionRegistry() {
       REAL(relocalization_recheck_margin, AtLeast(1), "", "a re-check's pose needs this many times the tracked pose's inliers"),
       // Keyframes and the local map.
       REAL(keyframe_tracked_ratio, OpenClosed(0, 1), "", "new keyframe below this share of the reference keyframe's points"),
-      SWITCH(keyframe_when_kept_out_instances_let_in, "new keyframe when instances the reference kept out are let in unmapped"),
       REAL(close_depth_m, AtLeast(0), "m", "depth of a close point in keyframe decisions (0: from the first frame)"),
       SWITCH(local_bundle_adjustment, "local bundle adjustment after each keyframe"),
       WHOLE(local_ba_keyframes, AtLeast(1), "", "keyframes the local bundle adjustment moves"),

@@ -937,58 +937,6 @@ TEST(TrackerTest, ObjectFillingTheViewThatStartsToMoveIsJudgedMovingAndLeftOutOf
   EXPECT_LT(worst_m, 0.035);
 }
 
-// A large moveable object that stays put (a chair, a seated person) fills half the view
-// from the first frame, before a slow camera. Not judged yet, it is kept out of the first
-// keyframes; once it is judged static, keyframe_when_kept_out_instances_let_in makes a
-// keyframe that maps it. Without it the next keyframe waits until the room's tracked share
-// falls, counted against keyframes that hold no point on the object (close_depth_m is
-// set so that the room's points all count as close, as in an office, and the close-point
-// rule does not fire first).
-TEST(TrackerTest, StillObjectKeptOutOfTheFirstKeyframesIsMappedOnceItIsJudged) {
-  const PinholeCamera camera = TestCamera();
-  auto quads = RoomQuads(5);
-  const auto big_box = BoxQuads({0.5, -0.8, 0.5}, {0.8, 0.8, 2.3}, 41, 1, 512);
-  quads.insert(quads.end(), big_box.begin(), big_box.end());
-  // A quarter of HandHeldPathPose's speed.
-  const auto pose = [](int i) {
-    const double t = i / 120.0;
-    return testing::LookingAlongX(Eigen::Vector3d(-2.0 + 0.25 * t, 0.3 * std::sin(1.3 * t), 1.4 + 0.05 * std::sin(2 * t)),
-                                  0.25 * std::sin(0.9 * t));
-  };
-  FrameInstances instances;
-  instances.moveable_ids = {1};
-  std::map<bool, int> first_judged, first_mapped, keyframes;
-  for (const bool rule : {true, false}) {
-    SCOPED_TRACE(::testing::Message() << "keyframe_when_kept_out_instances_let_in: " << rule);
-    TrackerOptions options = StartingAt(pose(0));
-    options.keyframe_when_kept_out_instances_let_in = rule;
-    options.close_depth_m = 10;
-    Tracker tracker(camera, options);
-    first_judged[rule] = first_mapped[rule] = -1;
-    for (int i = 0; i < 60; ++i) {
-      const auto rendered = RenderQuads(quads, camera, pose(i), i, i / 30.0);
-      instances.ids = rendered.instance_ids;
-      const FrameResult result = TrackJudging(tracker, rendered.frame, instances);
-      ASSERT_TRUE(result.localized()) << "frame " << i;
-      EXPECT_LT(PositionError(result.T_wc, pose(i)), 0.02) << "frame " << i;
-      keyframes[rule] += result.keyframe;
-      for (const InstanceJudgement& judgement : result.instances) {
-        if (judgement.id == 1 && judgement.judged && first_judged[rule] < 0) first_judged[rule] = i;
-      }
-      if (first_mapped[rule] >= 0) continue;
-      for (const auto& point : tracker.map().points()) {
-        if (!point->bad && point->instance_id == 1) first_mapped[rule] = i;
-      }
-    }
-    ASSERT_GE(first_judged[rule], 1) << "the box is judged a baseline after it is first seen";
-    ASSERT_GE(first_mapped[rule], first_judged[rule]) << "nothing of the box is mapped before it is judged";
-  }
-  EXPECT_LE(first_mapped[true], first_judged[true] + 1);
-  EXPECT_GE(first_mapped[false], first_judged[false] + 15);
-  // One keyframe more, not one a frame.
-  EXPECT_LE(keyframes[true], keyframes[false] + 2);
-}
-
 // A camera that starts at speed (15 m/s: half a metre a frame, as a city camera at 15 Hz
 // moves 0.4 m) behind an object that moves with it, as in traffic. No velocity is known on
 // its second frame: the window search around the first pose finds the object where it
