@@ -100,6 +100,7 @@ void Tracker::BeginFrame(const RgbdFrame& frame) {
   if (!frame.depth_m.empty() && (frame.depth_m.type() != CV_32F || frame.depth_m.size() != size)) {
     throw Error("frame " + std::to_string(frame.index) + ": depth must be CV_32F metres of the camera's size");
   }
+  if (std::isnan(s.first_frame_stamp_s)) s.first_frame_stamp_s = frame.stamp_s;
   s.current = WorkingFrame();
   s.current.index = frame.index;
   s.current.stamp_s = frame.stamp_s;
@@ -253,6 +254,9 @@ std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& ins
       by_depth && !s.history.empty() && !s.history.front().depth_m.empty() ? &s.history.front() : nullptr;
   const bool depth_full_baseline =
       past != nullptr && s.current.stamp_s - past->stamp_s >= options_.motion_baseline_s - 1e-6;
+  const bool at_start = s.current.stamp_s - s.first_frame_stamp_s < options_.motion_baseline_s - 1e-6;
+  const bool margin_around_unjudged =
+      options_.instance_margin_around_unjudged && (options_.instance_margin_around_unjudged_at_start || !at_start);
   std::vector<InstanceJudgement> judgements;
   for (const auto& [id, features] : features_of) {
     InstanceJudgement judgement;
@@ -308,7 +312,7 @@ std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& ins
     }
     s.KeepOutOfPoseAndMap(judgement, features);
     if (s.current.excluded[static_cast<size_t>(features.front())] &&
-        (judgement.moving || options_.instance_margin_around_unjudged)) {
+        (judgement.moving || margin_around_unjudged)) {
       s.KeepOutNearbyBackground(id);
     }
     judgements.push_back(judgement);

@@ -277,6 +277,12 @@ struct TrackerOptions {
   // with it a sitting office loses background near people in a map's first frames
   // (figures: docs/results.md, "The wider margin as the default").
   bool instance_margin_around_unjudged = true;
+  // Whether that margin also goes around them in a run's first motion_baseline_s (and a
+  // map's begun anew), when no instance can be judged yet: then every person, chair and
+  // parked car is not judged yet, and their margins together take much of the
+  // background, so that an object the segmenter missed (a truck moving beside the
+  // camera) can outnumber what is left of it.
+  bool instance_margin_around_unjudged_at_start = true;
   // An instance of a class that does not move (not on the moveable shortlist: a traffic
   // light, a bench, a hydrant) is judged moving only on at least this many measured
   // points. Its few matches are often wrong in a consistent way (a traffic light's three

@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdint>
 #include <deque>
+#include <limits>
 #include <map>
 #include <memory>
 #include <optional>
@@ -245,6 +246,7 @@ struct Tracker::Impl {
   int last_keyframe_frame = -1000;
   int last_relocalization_frame = -1000;
   bool initialized = false;
+  double first_frame_stamp_s = std::numeric_limits<double>::quiet_NaN();  // of this tracker state
   bool pending_first_keyframe = false;
   bool last_status_lost = false;
   double lost_since_s = -1;  // stamp of the first frame of the current run of lost frames

@@ -521,33 +521,52 @@ TEST(TrackerTest, LongTermMapKeepsAStillInstanceOfAFixedClassOnly) {
 // (here the sliding box, not judged in its first frames) is kept out with it and recorded
 // as the box's; one farther out stays in. With instance_margin_scales_with_level the
 // margin is instance_margin_px times the scale of the feature's pyramid level; without
-// instance_margin_around_unjudged there is none around the unjudged box. The box's
-// mask is shrunk by 4 px, so the corners of its outline lie outside it, and each recorded
-// feature is checked against its exact distance to the mask.
+// instance_margin_around_unjudged there is none around the unjudged box, and without
+// instance_margin_around_unjudged_at_start none in the run's first motion_baseline_s (the
+// box's mask given from the first frame), but one around a box first masked later (after
+// 12 frames without masks, 0.4 s; its depth taken away, or the depth of the frames before
+// would judge it at once). The box's mask is shrunk by 4 px, so the corners of its
+// outline lie outside it, and each recorded feature is checked against its exact
+// distance to the mask.
 TEST(TrackerTest, BackgroundJustOutsideAKeptOutMaskIsKeptOutWithIt) {
   const PinholeCamera camera = TestCamera();
   struct Margin {
     int px;
     bool scales_with_level;
     bool around_unjudged;
+    bool around_unjudged_at_start = true;
+    int first_masked_frame = 0;
   };
   for (const Margin margin : {Margin{8, false, true}, Margin{0, false, true}, Margin{6, true, true},
-                              Margin{8, false, false}}) {
+                              Margin{8, false, false}, Margin{8, false, true, false, 0},
+                              Margin{8, false, true, false, 12}}) {
     SCOPED_TRACE(::testing::Message() << "instance_margin_px " << margin.px << ", scales with level "
-                                      << margin.scales_with_level << ", around unjudged " << margin.around_unjudged);
+                                      << margin.scales_with_level << ", around unjudged " << margin.around_unjudged
+                                      << ", at start " << margin.around_unjudged_at_start << ", masked from frame "
+                                      << margin.first_masked_frame);
     TrackerOptions options = StartingAt(HandHeldPathPose(0));
     options.record_features = true;
     options.instance_margin_px = margin.px;
     options.instance_margin_scales_with_level = margin.scales_with_level;
     options.instance_margin_around_unjudged = margin.around_unjudged;
-    const int level0_margin_px = margin.around_unjudged ? margin.px : 0;  // the box is never judged here
+    options.instance_margin_around_unjudged_at_start = margin.around_unjudged_at_start;
+    const bool at_start = margin.first_masked_frame / 30.0 < options.motion_baseline_s;
+    // The box is never judged here.
+    const int level0_margin_px =
+        margin.around_unjudged && (margin.around_unjudged_at_start || !at_start) ? margin.px : 0;
     Tracker tracker(camera, options);
     FrameInstances instances;
     instances.moveable_ids = {1};
-    int near_outside = 0, far_outside = 0, coarse_level_band = 0;
-    for (int i = 0; i < 3; ++i) {
+    for (int i = 0; i < margin.first_masked_frame; ++i) {
       const RenderedFrame rendered = RenderSlidingAndStillBox(camera, i);
+      instances.ids = cv::Mat(rendered.instance_ids.size(), CV_16U, cv::Scalar(0));
+      ASSERT_TRUE(TrackJudging(tracker, rendered.frame, instances).localized()) << "frame " << i;
+    }
+    int near_outside = 0, far_outside = 0, coarse_level_band = 0;
+    for (int i = margin.first_masked_frame; i < margin.first_masked_frame + 3; ++i) {
+      RenderedFrame rendered = RenderSlidingAndStillBox(camera, i);
       const cv::Mat box = rendered.instance_ids == 1;
+      if (margin.first_masked_frame > 0) rendered.frame.depth_m.setTo(0, box);
       cv::Mat shrunk;
       cv::erode(box, shrunk, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(9, 9)));
       instances.ids = cv::Mat(box.size(), CV_16U, cv::Scalar(0));
