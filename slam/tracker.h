@@ -278,10 +278,12 @@ struct TrackerOptions {
   // (figures: docs/results.md, "The wider margin as the default").
   bool instance_margin_around_unjudged = true;
   // Whether that margin also goes around them in a run's first motion_baseline_s (and a
-  // map's begun anew), when no instance can be judged yet: then every person, chair and
-  // parked car is not judged yet, and their margins together take much of the
-  // background, so that an object the segmenter missed (a truck moving beside the
-  // camera) can outnumber what is left of it.
+  // map's begun anew), when no instance can be judged yet and every person, chair and
+  // parked car is kept out. Without it the walkers in view as a run begins bring their
+  // outlines into the first keyframe; with it the margins together can take so much of
+  // a street's background that an object the segmenter missed (a truck moving beside
+  // the camera) outnumbers what is left (docs/results.md, "The failed draw of seed 130
+  // traced").
   bool instance_margin_around_unjudged_at_start = true;
   // An instance of a class that does not move (not on the moveable shortlist: a traffic
   // light, a bench, a hydrant) is judged moving only on at least this many measured
