@@ -246,7 +246,8 @@ struct Tracker::Impl {
   int last_keyframe_frame = -1000;
   int last_relocalization_frame = -1000;
   bool initialized = false;
-  double first_frame_stamp_s = std::numeric_limits<double>::quiet_NaN();  // of this tracker state
+  // Stamp of the first frame of this state: the run, or a map begun anew after a reset.
+  double first_frame_stamp_s = std::numeric_limits<double>::quiet_NaN();
   bool pending_first_keyframe = false;
   bool last_status_lost = false;
   double lost_since_s = -1;  // stamp of the first frame of the current run of lost frames
