@@ -308,6 +308,7 @@ void Tracker::Impl::ApplyMotionMemory(bool full_baseline, InstanceJudgement* jud
 void Tracker::Impl::KeepOutOfPoseAndMap(const InstanceJudgement& judgement, const std::vector<int>& features) {
   const bool exclude = judgement.moving || (judgement.moveable_class && !judgement.judged);
   for (int f : features) current.excluded[static_cast<size_t>(f)] = exclude;
+  if (exclude) current.kept_out.insert(judgement.id);
   if (!judgement.moving) return;
   // Whatever the map holds of a moving object is now in the wrong place.
   for (const auto& owned : map->points()) {

@@ -61,6 +61,9 @@ void Tracker::Impl::CreateKeyframe() {
     point->id = map->NextPointId();
     point->position_w = T_wc * current.features.points_cam[i];
     point->instance_id = current.instance[i];
+    if (current.instance[i] == 0 && current.kept_out.count(current.near_instance[i]) > 0) {
+      point->bordered_unjudged_instance = current.near_instance[i];
+    }
     point->labelled_sightings = judged ? 1 : 0;
     point->instance_sightings = judged && current.instance[i] != 0 ? 1 : 0;
     point->made_on_moveable = current.on_moveable[i];
@@ -78,7 +81,13 @@ void Tracker::Impl::CreateKeyframe() {
     Map::UpdatePointStatistics(added, extractor);
     current.points[i] = added;
     current.outlier[i] = false;
-    recent_points.push_back(added);
+    // An outline waits for its instance's verdict before the culling looks at it: held
+    // out of every keyframe meanwhile, it would be culled for want of observations.
+    if (added->bordered_unjudged_instance != 0) {
+      waiting_outlines[added->bordered_unjudged_instance].push_back(added);
+    } else {
+      recent_points.push_back(added);
+    }
   }
   reference_keyframe = keyframe;
   last_keyframe_frame = current.index;
@@ -210,6 +219,27 @@ void Tracker::Impl::LocalBundleAdjustment() {
   current.T_cw = reference_keyframe->T_cw;
 }
 
+void Tracker::Impl::SettleWaitingOutlines(const std::vector<InstanceJudgement>& judgements) {
+  for (const InstanceJudgement& judgement : judgements) {
+    const auto waiting = waiting_outlines.find(judgement.id);
+    const bool still_unjudged = current.kept_out.count(judgement.id) > 0 && !judgement.moving;
+    if (waiting == waiting_outlines.end() || still_unjudged) continue;
+    for (MapPoint* point : waiting->second) {
+      if (point->bad) continue;
+      if (judgement.moving) {
+        Map::MarkBad(point);
+        continue;
+      }
+      // Judged still: from now on a point like any other, culled by how it does from here.
+      point->bordered_unjudged_instance = 0;
+      point->first_keyframe_id = map->keyframes().back()->id;
+      point->visible_count = point->found_count = 1;
+      recent_points.push_back(point);
+    }
+    waiting_outlines.erase(waiting);
+  }
+}
+
 void Tracker::Impl::PurgeBadPoints() {
   for (WorkingFrame* frame : {&current, &last}) {
     for (MapPoint*& point : frame->points) {
@@ -219,9 +249,11 @@ void Tracker::Impl::PurgeBadPoints() {
       if (point != nullptr && point->bad) point = nullptr;
     }
   }
-  recent_points.erase(
-      std::remove_if(recent_points.begin(), recent_points.end(), [](const MapPoint* p) { return p->bad; }),
-      recent_points.end());
+  const auto is_bad = [](const MapPoint* p) { return p->bad; };
+  recent_points.erase(std::remove_if(recent_points.begin(), recent_points.end(), is_bad), recent_points.end());
+  for (auto& [id, outline] : waiting_outlines) {
+    outline.erase(std::remove_if(outline.begin(), outline.end(), is_bad), outline.end());
+  }
   if (reference_keyframe != nullptr) {
     for (MapPoint*& point : reference_keyframe->points) {
       if (point != nullptr && point->bad) point = nullptr;

@@ -43,6 +43,12 @@ struct MapPoint {
   float min_distance_m = 0;                 // range where its descriptor's scale applies
   float max_distance_m = 0;
   std::uint16_t instance_id = 0;            // 0: background (set A)
+  // For a background point made within the margin of an instance not judged yet, where
+  // no margin kept such features out (a run's first frames: see TrackerOptions::
+  // instance_margin_around_unjudged_at_start), that instance, whose outline it may be:
+  // the point waits for the verdict out of the fine pose, the map's keyframes and the
+  // culling, and goes with the instance if it is judged moving. 0: none, or released.
+  std::uint16_t bordered_unjudged_instance = 0;
   bool fixed = false;                       // from a loaded long-term map
   bool bad = false;
   std::array<std::uint8_t, 3> color_rgb{};

@@ -317,6 +317,16 @@ std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& ins
     }
     judgements.push_back(judgement);
   }
+  // A background point made on the outline of an instance not judged yet stays out of
+  // the fine pose and the map until the verdict.
+  s.SettleWaitingOutlines(judgements);
+  for (size_t i = 0; i < s.current.points.size(); ++i) {
+    const MapPoint* point = s.current.points[i];
+    if (point != nullptr && !point->bad && s.current.instance[i] == 0 && point->bordered_unjudged_instance != 0) {
+      s.current.excluded[i] = true;
+      s.current.near_instance[i] = point->bordered_unjudged_instance;
+    }
+  }
   // Every match of a tracked frame counts, inlier of the coarse pose or not: a point made
   // on an object its mask missed moves with the object, and its later matches are the
   // coarse pose's outliers. A lost frame's matches were made at a wrong pose.

@@ -15,6 +15,7 @@
 #include <deque>
 #include <limits>
 #include <map>
+#include <set>
 #include <memory>
 #include <optional>
 #include <unordered_set>
@@ -218,8 +219,11 @@ struct WorkingFrame {
   std::vector<bool> on_moveable;        // on an instance of a moveable class
   // For a background feature, the instance whose mask lies within
   // TrackerOptions::instance_margin_px (scaled to the feature's level where
-  // instance_margin_scales_with_level; 0 = none): kept out with that instance.
+  // instance_margin_scales_with_level; 0 = none), or whose outline its map point was made
+  // on (MapPoint::bordered_unjudged_instance): kept out with that instance.
   std::vector<std::uint16_t> near_instance;
+  // Instances kept out of the fine pose and map on this frame (moving, or not judged yet).
+  std::set<std::uint16_t> kept_out;
   // The judgement from depth: each instance's interior depth samples, camera frame.
   std::map<std::uint16_t, std::vector<Eigen::Vector3d>> depth_samples_c;
   Eigen::Isometry3d T_cw = Eigen::Isometry3d::Identity();
@@ -279,6 +283,11 @@ struct Tracker::Impl {
   std::deque<InstanceSnapshot> history;
   std::map<std::uint16_t, InstanceMotionMemory> motion_memory;  // per instance id
   std::vector<MapPoint*> recent_points;
+  // Points made on the outline of an instance not judged yet (MapPoint::
+  // bordered_unjudged_instance), by instance: they wait for its verdict.
+  std::map<std::uint16_t, std::vector<MapPoint*>> waiting_outlines;
+  // Releases the outline of an instance judged still, or marks it bad if judged moving.
+  void SettleWaitingOutlines(const std::vector<InstanceJudgement>& judgements);
   int keyframes_since_purge = 0;
 
   // Per-frame state.
