@@ -279,12 +279,13 @@ struct TrackerOptions {
   bool instance_margin_around_unjudged = true;
   // Whether that margin also goes around them in a run's first motion_baseline_s (and a
   // map's begun anew), when no instance can be judged yet and every person, chair and
-  // parked car is kept out. Without it the walkers in view as a run begins bring their
-  // outlines into the first keyframe; with it the margins take part of a street's
-  // background, and an object the segmenter missed (a truck moving beside the camera)
-  // can then outnumber what is left of it at the second frame (docs/results.md, "The
-  // failed draw of seed 130 traced").
-  bool instance_margin_around_unjudged_at_start = true;
+  // parked car is kept out. With it the margins take part of a street's background, and
+  // an object the segmenter missed (a truck moving beside the camera) can then outnumber
+  // what is left of it at the second frame. Without it the first keyframe maps the
+  // background there too, and those points wait for the verdict on the instance whose
+  // outline they may be (MapPoint::bordered_unjudged_instance), as a walker's outline
+  // must (docs/results.md, "The outline that waits for the verdict").
+  bool instance_margin_around_unjudged_at_start = false;
   // An instance of a class that does not move (not on the moveable shortlist: a traffic
   // light, a bench, a hydrant) is judged moving only on at least this many measured
   // points. Its few matches are often wrong in a consistent way (a traffic light's three

@@ -308,12 +308,17 @@ TEST(FeatureRecordTest, MutualRecordsEveryFeatureOnceWithAConsistentKind) {
     ASSERT_EQ(result.feature_records.size(), static_cast<size_t>(result.num_features)) << "frame " << result.frame_index;
     std::map<FeatureKind, int> counts = KindCounts(result);
     EXPECT_EQ(counts[FeatureKind::kUsed], result.num_fine_inliers) << "frame " << result.frame_index;
-    std::map<std::uint16_t, bool> moving;
-    for (const slam::InstanceJudgement& judgement : result.instances) moving[judgement.id] = judgement.moving;
+    std::map<std::uint16_t, bool> moving, judged;
+    for (const slam::InstanceJudgement& judgement : result.instances) {
+      moving[judgement.id] = judgement.moving;
+      judged[judgement.id] = judgement.judged;
+    }
     const RenderedFrame rendered = MovingBoxFrame(result.frame_index);
     for (const FeatureRecord& record : result.feature_records) {
       // The recorded instance is the one under the keypoint; a background feature kept
-      // out with an instance whose mask lies within the margin is recorded as that one's.
+      // out with an instance is recorded as that one's: one whose mask lies within the
+      // margin, or one not judged yet whose outline its map point was made on, on the
+      // run's first frame (it waits for the verdict wherever the instance is now).
       const cv::Point pixel(static_cast<int>(std::lround(record.pixel.x)), static_cast<int>(std::lround(record.pixel.y)));
       const std::uint16_t under = rendered.instance_ids.at<std::uint16_t>(pixel);
       if (under != 0 || record.instance_id == 0) {
@@ -326,7 +331,8 @@ TEST(FeatureRecordTest, MutualRecordsEveryFeatureOnceWithAConsistentKind) {
         const int margin = static_cast<int>(std::lround(defaults.instance_margin_px * level_scale));
         const cv::Rect near = cv::Rect(pixel.x - margin, pixel.y - margin, 2 * margin + 1, 2 * margin + 1) &
                               cv::Rect(0, 0, rendered.instance_ids.cols, rendered.instance_ids.rows);
-        ASSERT_GT(cv::countNonZero(rendered.instance_ids(near) == record.instance_id), 0)
+        const bool waits_for_verdict = !judged[record.instance_id] && record.kind == FeatureKind::kDroppedMoveable;
+        ASSERT_TRUE(cv::countNonZero(rendered.instance_ids(near) == record.instance_id) > 0 || waits_for_verdict)
             << "recorded as instance " << record.instance_id << ", none of it within " << margin << " px";
         ASSERT_TRUE(record.kind == FeatureKind::kDroppedMoving || record.kind == FeatureKind::kDroppedMoveable);
       }
