@@ -317,8 +317,8 @@ TEST(FeatureRecordTest, MutualRecordsEveryFeatureOnceWithAConsistentKind) {
     for (const FeatureRecord& record : result.feature_records) {
       // The recorded instance is the one under the keypoint; a background feature kept
       // out with an instance is recorded as that one's: one whose mask lies within the
-      // margin, or one not judged yet whose outline its map point was made on, on the
-      // run's first frame (it waits for the verdict wherever the instance is now).
+      // margin, or one not judged yet whose outline its map point was made on in the
+      // run's first frames (it waits for the verdict wherever the instance is now).
       const cv::Point pixel(static_cast<int>(std::lround(record.pixel.x)), static_cast<int>(std::lround(record.pixel.y)));
       const std::uint16_t under = rendered.instance_ids.at<std::uint16_t>(pixel);
       if (under != 0 || record.instance_id == 0) {
