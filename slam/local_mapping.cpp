@@ -222,7 +222,7 @@ void Tracker::Impl::LocalBundleAdjustment() {
 void Tracker::Impl::SettleWaitingOutlines(const std::vector<InstanceJudgement>& judgements) {
   for (const InstanceJudgement& judgement : judgements) {
     const auto waiting = waiting_outlines.find(judgement.id);
-    const bool still_unjudged = current.kept_out.count(judgement.id) > 0 && !judgement.moving;
+    const bool still_unjudged = judgement.moveable_class && !judgement.judged && !judgement.moving;
     if (waiting == waiting_outlines.end() || still_unjudged) continue;
     for (MapPoint* point : waiting->second) {
       if (point->bad) continue;
