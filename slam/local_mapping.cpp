@@ -35,6 +35,12 @@ bool Tracker::Impl::NeedNewKeyframe() const {
   return (few_tracked || need_close) && inliers > 15;
 }
 
+std::array<std::uint8_t, 3> Tracker::Impl::ColorAt(const cv::KeyPoint& keypoint) const {
+  const cv::Vec3b bgr = current.color_bgr.at<cv::Vec3b>(static_cast<int>(std::lround(keypoint.pt.y)),
+                                                        static_cast<int>(std::lround(keypoint.pt.x)));
+  return {bgr[2], bgr[1], bgr[0]};
+}
+
 void Tracker::Impl::CreateKeyframe() {
   auto owned = std::make_unique<Keyframe>();
   owned->id = map->NextKeyframeId();
@@ -43,7 +49,18 @@ void Tracker::Impl::CreateKeyframe() {
   owned->T_cw = current.T_cw;
   owned->features = current.features;
   owned->points.assign(current.features.size(), nullptr);
+  if (options.map_instances_on_verdict && !current.kept_out.empty()) {
+    owned->instance = current.instance;
+    owned->color_rgb.reserve(current.features.size());
+    for (const cv::KeyPoint& kp : current.features.keypoints) owned->color_rgb.push_back(ColorAt(kp));
+  }
   Keyframe* keyframe = map->AddKeyframe(std::move(owned));
+  if (!keyframe->instance.empty()) {
+    for (const InstanceJudgement& judgement : result.instances) {
+      const bool unjudged = judgement.moveable_class && !judgement.judged && !judgement.moving;
+      if (unjudged && current.kept_out.count(judgement.id) > 0) keyframes_before_verdict[judgement.id].push_back(keyframe);
+    }
+  }
 
   for (size_t i = 0; i < current.points.size(); ++i) {
     MapPoint* point = current.points[i];
@@ -72,10 +89,7 @@ void Tracker::Impl::CreateKeyframe() {
     point->first_stamp_s = current.stamp_s;
     point->last_matched_frame = current.index;
     point->last_visible_frame = current.index;
-    const cv::KeyPoint& kp = current.features.keypoints[i];
-    const cv::Vec3b bgr =
-        current.color_bgr.at<cv::Vec3b>(static_cast<int>(std::lround(kp.pt.y)), static_cast<int>(std::lround(kp.pt.x)));
-    point->color_rgb = {bgr[2], bgr[1], bgr[0]};
+    point->color_rgb = ColorAt(current.features.keypoints[i]);
     MapPoint* added = map->AddPoint(std::move(point));
     Map::AddObservation(added, keyframe, static_cast<int>(i));
     Map::UpdatePointStatistics(added, extractor);
@@ -237,6 +251,114 @@ void Tracker::Impl::SettleWaitingOutlines(const std::vector<InstanceJudgement>& 
       recent_points.push_back(point);
     }
     waiting_outlines.erase(waiting);
+  }
+}
+
+std::vector<int> Tracker::Impl::MatchByProjection(const std::vector<MapPoint*>& points, const Eigen::Isometry3d& T_cw,
+                                                  const FrameFeatures& features,
+                                                  const std::vector<int>& candidates) const {
+  const auto& inverse_sigma2 = extractor.inverse_level_sigma2();
+  std::vector<int> match(points.size(), -1);
+  std::vector<bool> taken(features.size(), false);
+  for (size_t k = 0; k < points.size(); ++k) {
+    const Eigen::Vector3d p_cam = T_cw * points[k]->position_w;
+    if (p_cam.z() <= 0) continue;
+    const Eigen::Vector2d uv = camera.Project(p_cam);
+    const double right_u = uv.x() - bf / p_cam.z();
+    int best = -1;
+    int best_distance = options.strict_descriptor_distance + 1;
+    for (const int i : candidates) {
+      const size_t f = static_cast<size_t>(i);
+      if (taken[f] || !(features.depth_m[f] > 0)) continue;
+      const cv::KeyPoint& kp = features.keypoints[f];
+      const double du = kp.pt.x - uv.x(), dv = kp.pt.y - uv.y();
+      const double dr = kp.pt.x - bf / features.depth_m[f] - right_u;
+      if ((du * du + dv * dv + dr * dr) * inverse_sigma2[static_cast<size_t>(kp.octave)] >
+          options.bundle_adjustment.chi2_stereo) {
+        continue;
+      }
+      const int distance = DescriptorDistance(points[k]->descriptor.data(), features.descriptors.ptr(i));
+      if (distance < best_distance) {
+        best_distance = distance;
+        best = i;
+      }
+    }
+    if (best < 0) continue;
+    taken[static_cast<size_t>(best)] = true;
+    match[k] = best;
+  }
+  return match;
+}
+
+void Tracker::Impl::MapInstancesOnTheirVerdict(const std::vector<InstanceJudgement>& judgements,
+                                               double evidence_since_s) {
+  for (const InstanceJudgement& judgement : judgements) {
+    const auto found = keyframes_before_verdict.find(judgement.id);
+    const bool still_unjudged = judgement.moveable_class && !judgement.judged && !judgement.moving;
+    if (found == keyframes_before_verdict.end() || still_unjudged) continue;
+    const std::vector<Keyframe*> keyframes = std::move(found->second);
+    keyframes_before_verdict.erase(found);
+    // Judged moving, what those keyframes saw of it has moved since. Keyframes older than
+    // what the verdict compared may have seen it elsewhere.
+    if (judgement.moving) continue;
+    // As the keyframes would have mapped it, oldest first: each matches the points the
+    // older ones made on it, by projection, and makes points of the rest.
+    std::vector<MapPoint*> made;
+    for (Keyframe* keyframe : keyframes) {
+      if (keyframe->bad || keyframe->stamp_s < evidence_since_s - 1e-6) continue;
+      std::vector<int> unmapped;
+      for (size_t i = 0; i < keyframe->features.size(); ++i) {
+        const float depth = keyframe->features.depth_m[i];
+        if (keyframe->instance[i] == judgement.id && keyframe->points[i] == nullptr && depth > 0 &&
+            depth <= options.max_point_depth_m) {
+          unmapped.push_back(static_cast<int>(i));
+        }
+      }
+      const std::vector<int> match = MatchByProjection(made, keyframe->T_cw, keyframe->features, unmapped);
+      for (size_t k = 0; k < made.size(); ++k) {
+        if (match[k] >= 0) Map::AddObservation(made[k], keyframe, match[k]);
+      }
+      for (const int i : unmapped) {
+        if (keyframe->points[static_cast<size_t>(i)] != nullptr) continue;
+        auto point = std::make_unique<MapPoint>();
+        point->id = map->NextPointId();
+        point->position_w = keyframe->T_wc() * keyframe->features.points_cam[static_cast<size_t>(i)];
+        point->instance_id = judgement.id;
+        point->labelled_sightings = point->instance_sightings = 1;
+        point->made_on_moveable = judgement.moveable_class;
+        point->moveable_sightings = judgement.moveable_class ? 1 : 0;
+        // Young, as a keyframe at the verdict would have made it: a point judges its
+        // instance only once made a baseline before (TrackerOptions::motion_baseline_s),
+        // and the verdict that let it in must not be judged again on its own evidence.
+        point->first_stamp_s = current.stamp_s;
+        point->color_rgb = keyframe->color_rgb[static_cast<size_t>(i)];
+        MapPoint* added = map->AddPoint(std::move(point));
+        Map::AddObservation(added, keyframe, i);
+        Map::UpdatePointStatistics(added, extractor);
+        made.push_back(added);
+      }
+    }
+    if (made.empty()) continue;
+    // The current frame matches them too, as tracking would have: else the keyframe test
+    // sees the reference keyframe gain points this frame does not track, and makes a
+    // keyframe that maps the instance a second time.
+    std::vector<int> unmatched;
+    for (size_t i = 0; i < current.features.size(); ++i) {
+      if (current.instance[i] == judgement.id && current.points[i] == nullptr) unmatched.push_back(static_cast<int>(i));
+    }
+    for (MapPoint* point : made) Map::UpdatePointStatistics(point, extractor);
+    const std::vector<int> match = MatchByProjection(made, current.T_cw, current.features, unmatched);
+    for (size_t k = 0; k < made.size(); ++k) {
+      MapPoint* point = made[k];
+      // From now on points like any other, culled by how they do from the newest keyframe.
+      point->first_keyframe_id = map->keyframes().back()->id;
+      recent_points.push_back(point);
+      if (match[k] < 0) continue;
+      const size_t i = static_cast<size_t>(match[k]);
+      current.points[i] = point;
+      current.outlier[i] = false;
+      point->last_matched_frame = point->last_visible_frame = current.index;
+    }
   }
 }
 

@@ -94,6 +94,10 @@ struct Keyframe {
   Eigen::Isometry3d T_cw = Eigen::Isometry3d::Identity();
   FrameFeatures features;
   std::vector<MapPoint*> points;  // per keypoint; nullptr = none
+  // Per keypoint: the instance it lay on (0: background; empty without masks), and its
+  // colour, for points made later on what this keyframe kept out (map_instances_on_verdict).
+  std::vector<std::uint16_t> instance;
+  std::vector<std::array<std::uint8_t, 3>> color_rgb;
   bool bad = false;
 
   Eigen::Isometry3d T_wc() const { return T_cw.inverse(); }

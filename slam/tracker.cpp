@@ -320,6 +320,9 @@ std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& ins
   // A background point made on the outline of an instance not judged yet stays out of
   // the fine pose and the map until the verdict.
   s.SettleWaitingOutlines(judgements);
+  // What the verdict compared began at the remembered frame a baseline back.
+  const double evidence_since_s = past != nullptr ? past->stamp_s : s.current.stamp_s - options_.motion_baseline_s;
+  if (options_.map_instances_on_verdict) s.MapInstancesOnTheirVerdict(judgements, evidence_since_s);
   for (size_t i = 0; i < s.current.points.size(); ++i) {
     const MapPoint* point = s.current.points[i];
     if (point != nullptr && !point->bad && s.current.instance[i] == 0 && point->bordered_unjudged_instance != 0) {

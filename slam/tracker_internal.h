@@ -288,6 +288,22 @@ struct Tracker::Impl {
   std::map<std::uint16_t, std::vector<MapPoint*>> waiting_outlines;
   // Releases the outline of an instance judged still, or marks it bad if judged moving.
   void SettleWaitingOutlines(const std::vector<InstanceJudgement>& judgements);
+  // The current frame's colour at a keypoint, RGB.
+  std::array<std::uint8_t, 3> ColorAt(const cv::KeyPoint& keypoint) const;
+  // Keyframes that kept an instance out before its first verdict, oldest first, by
+  // instance (TrackerOptions::map_instances_on_verdict).
+  std::map<std::uint16_t, std::vector<Keyframe*>> keyframes_before_verdict;
+  // Matches each of `points` to the nearest descriptor (within strict_descriptor_distance)
+  // among the `candidates` of `features`, seen at T_cw, that lie where it projects within
+  // the reprojection error an inlier may have (depth as a stereo coordinate); one feature
+  // per point. Per point: the feature's index, or -1.
+  std::vector<int> MatchByProjection(const std::vector<MapPoint*>& points, const Eigen::Isometry3d& T_cw,
+                                     const FrameFeatures& features, const std::vector<int>& candidates) const;
+  // Maps each instance judged still for the first time in the keyframes of
+  // keyframes_before_verdict made since `evidence_since_s`, the start of what the
+  // verdict compared, and matches the points into the current frame; forgets the
+  // keyframes of an instance judged moving.
+  void MapInstancesOnTheirVerdict(const std::vector<InstanceJudgement>& judgements, double evidence_since_s);
   int keyframes_since_purge = 0;
 
   // Per-frame state.

@@ -295,9 +295,10 @@ TEST(MutualLoopTest, WalkingPersonIsJudgedMovingAndParkedCarStaticThroughTheLoop
   }
   EXPECT_GT(car_points, 0) << "the parked car belongs to the tracking map";
 
-  // Long-term map: background only, so nothing of either instance.
+  // Long-term map: background only, so nothing of either instance. Hundreds of points:
+  // with the car mapped on its verdict, tracking needs four keyframes here (six without).
   const slam::LongTermMapData long_term = loop.tracker().ExportLongTermMap(/*include_instances=*/false);
-  EXPECT_GT(long_term.points.size(), 500u);
+  EXPECT_GT(long_term.points.size(), 200u);
   for (const slam::StoredMapPoint& stored : long_term.points) {
     EXPECT_FALSE(car.HoldsAboveTheFloor(stored.position_w, kSurfaceMarginM)) << stored.position_w.transpose();
     EXPECT_FALSE(walker_swept.HoldsAboveTheFloor(stored.position_w, kSurfaceMarginM)) << stored.position_w.transpose();

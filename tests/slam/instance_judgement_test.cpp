@@ -290,8 +290,11 @@ TEST(InstanceJudgementTest, YoungMapPointsJudgeAnInstanceOnlyOnceItWasJudgedStat
   for (int i = 0; i < 30; ++i) script.push_back({i / 30.0, -0.9, BoxDepth::kFull});
   std::vector<RenderedFrame> frames = Render(script);
 
-  // Where the box's first points are made, on a run whose young points never judge.
+  // Where the box's first points are made, on a run whose young points never judge: by
+  // the first keyframe after its verdict. (Mapped on the verdict instead, they are as
+  // young there: TrackerTest.InstanceJudgedStillIsMappedInTheKeyframesThatKeptItOut.)
   TrackerOptions options = SparseJudgement();
+  options.map_instances_on_verdict = false;
   options.record_features = true;
   options.static_frames_to_trust_young_points = 1 << 20;
   const std::vector<FrameResult> reference = TrackMutual(frames, options);

@@ -677,6 +677,72 @@ TEST(TrackerTest, OutlineMappedBeforeItsInstanceIsJudgedWaitsForTheVerdict) {
   EXPECT_GE(mapped_again, 2);
 }
 
+// An instance kept out of the first keyframes while it is not judged yet is mapped in
+// them once it is judged still: on the frame of the verdict the still box has points,
+// matched across those keyframes and on the box's faces, and that frame tracks them.
+// The sliding box, judged moving, never enters the map. Without the option the box has
+// no point seen by two keyframes on that frame.
+TEST(TrackerTest, InstanceJudgedStillIsMappedInTheKeyframesThatKeptItOut) {
+  const PinholeCamera camera = TestCamera();
+  // Distance from the still box's surface (RenderSlidingAndStillBox: x 1.0..1.8,
+  // y -1.6..-0.8, z 0..1.0).
+  const auto distance_to_still_box = [](const Eigen::Vector3d& p) {
+    const Eigen::Vector3d lo(1.0, -1.6, 0.0), hi(1.8, -0.8, 1.0);
+    const Eigen::Vector3d outside = (lo - p).cwiseMax(p - hi).cwiseMax(0.0);
+    if (outside.norm() > 0) return outside.norm();
+    return (p - lo).cwiseMin(hi - p).minCoeff();
+  };
+  for (const bool map_on_verdict : {true, false}) {
+    SCOPED_TRACE(map_on_verdict ? "mapped on the verdict" : "not mapped on the verdict");
+    TrackerOptions options = StartingAt(HandHeldPathPose(0));
+    options.map_instances_on_verdict = map_on_verdict;
+    Tracker tracker(camera, options);
+    FrameInstances instances;
+    instances.moveable_ids = {1, 2};
+    int verdict_frame = -1;
+    size_t keyframes_before_verdict = 0;
+    for (int i = 0; i < 30 && verdict_frame < 0; ++i) {
+      const auto rendered = RenderSlidingAndStillBox(camera, i);
+      instances.ids = rendered.instance_ids;
+      const size_t keyframes_before = tracker.map().keyframes().size();
+      const FrameResult result = TrackJudging(tracker, rendered.frame, instances);
+      ASSERT_TRUE(result.localized()) << "frame " << i;
+      for (const auto& point : tracker.map().points()) {
+        EXPECT_TRUE(point->bad || point->instance_id != 1) << "frame " << i << ": the sliding box is mapped";
+      }
+      for (const InstanceJudgement& judgement : result.instances) {
+        if (judgement.id == 2 && judgement.judged) {
+          EXPECT_FALSE(judgement.moving);
+          verdict_frame = i;
+        }
+      }
+      if (verdict_frame < 0) keyframes_before_verdict = tracker.map().keyframes().size();
+      if (verdict_frame >= 0) keyframes_before_verdict = std::min(keyframes_before_verdict, keyframes_before);
+    }
+    ASSERT_GE(verdict_frame, 1);
+    ASSERT_GE(keyframes_before_verdict, 2u) << "the box was not kept out of keyframes long enough to matter";
+    int on_box = 0, seen_by_two = 0, tracked = 0, on_its_faces = 0;
+    for (const auto& point : tracker.map().points()) {
+      if (point->bad || point->instance_id != 2) continue;
+      ++on_box;
+      // Young from the verdict on, as a keyframe's would be: the verdict that let them in
+      // is not judged again on their evidence.
+      EXPECT_DOUBLE_EQ(point->first_stamp_s, verdict_frame / 30.0);
+      seen_by_two += point->NumObservations() >= 2;
+      tracked += point->found_count >= 2;
+      on_its_faces += distance_to_still_box(point->position_w) < 0.01;
+    }
+    if (map_on_verdict) {
+      EXPECT_GE(on_box, 100);
+      EXPECT_GE(seen_by_two, 40);
+      EXPECT_GE(tracked, 20) << "the frame of the verdict does not track the points made on it";
+      EXPECT_GE(on_its_faces, 0.95 * on_box);
+    } else {
+      EXPECT_EQ(seen_by_two, 0);
+    }
+  }
+}
+
 // The oracle takes the verdicts it is given, whatever the motion measures: told that
 // the still box moves and the sliding one stands, it keeps the still box out of the pose
 // and map and maps the sliding one.
