@@ -39,9 +39,8 @@ constexpr double kFps = 30.0;
 
 PinholeCamera TestCamera() { return PinholeCamera::FromVerticalFov(640, 480, 50); }
 
-// Depth alone judges.
-// The box is not mapped on its verdict (TrackerOptions::map_instances_on_verdict): these
-// tests measure what the judgement sees of a box the pose does not follow. A mapped box
+// Depth alone judges. The box is not mapped on its verdict (TrackerOptions::
+// map_instances_on_verdict): these tests measure what the judgement sees of a box the pose does not follow. A mapped box
 // that starts to move drags the coarse pose it is judged against, as any mapped object
 // does (TrackerTest.ObjectFillingTheViewThatStartsToMoveIsJudgedMovingAndLeftOutOfThePose).
 TrackerOptions DepthOnly() {

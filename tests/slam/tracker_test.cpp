@@ -714,10 +714,9 @@ TEST(TrackerTest, InstanceJudgedStillIsMappedInTheKeyframesThatKeptItOut) {
         if (judgement.id == 2 && judgement.judged) {
           EXPECT_FALSE(judgement.moving);
           verdict_frame = i;
+          keyframes_before_verdict = keyframes_before;
         }
       }
-      if (verdict_frame < 0) keyframes_before_verdict = tracker.map().keyframes().size();
-      if (verdict_frame >= 0) keyframes_before_verdict = std::min(keyframes_before_verdict, keyframes_before);
     }
     ASSERT_GE(verdict_frame, 1);
     ASSERT_GE(keyframes_before_verdict, 2u) << "the box was not kept out of keyframes long enough to matter";
