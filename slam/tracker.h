@@ -286,13 +286,15 @@ struct TrackerOptions {
   // outline they may be (MapPoint::bordered_unjudged_instance), as a walker's outline
   // must (docs/results.md, "The outline that waits for the verdict").
   bool instance_margin_around_unjudged_at_start = false;
-  // Whether an instance judged still for the first time is mapped in the keyframes that
-  // kept it out while it was not judged yet (within what the verdict compared, the
-  // frame a motion_baseline_s back), its points matched across them as tracking would
-  // have matched them. Without it the first keyframes of a run hold nothing of the
-  // people, chairs and cars in view, and the map gains them only at the next keyframe,
-  // which comes late: the map has the structure it would have had with the verdict
-  // known from the start (docs/results.md, "Mapping an instance on its verdict").
+  // Whether an instance judged still for the first time is mapped in the keyframes of a
+  // map's first motion_baseline_s that kept it out, not judged yet (those within what
+  // the verdict compared), its points matched across them as tracking would have matched
+  // them. Without it a map's founding keyframes hold nothing of the people, chairs and
+  // cars in view, and the map gains them only at the next keyframe, which in an office
+  // comes late. Only there: later an instance that comes into view is kept out of few
+  // keyframes in an office, but of several in a street (a keyframe on most frames), and
+  // mapped from all of them on one frame's still verdict, a wrong verdict costs more
+  // than the map gains (docs/results.md, "Mapping an instance on its verdict").
   bool map_instances_on_verdict = true;
   // An instance of a class that does not move (not on the moveable shortlist: a traffic
   // light, a bench, a hydrant) is judged moving only on at least this many measured

@@ -290,8 +290,8 @@ struct Tracker::Impl {
   void SettleWaitingOutlines(const std::vector<InstanceJudgement>& judgements);
   // The current frame's colour at a keypoint, RGB.
   std::array<std::uint8_t, 3> ColorAt(const cv::KeyPoint& keypoint) const;
-  // Keyframes that kept an instance out before its first verdict, oldest first, by
-  // instance (TrackerOptions::map_instances_on_verdict).
+  // Keyframes of the map's first motion_baseline_s that kept an instance out before its
+  // first verdict, oldest first, by instance (TrackerOptions::map_instances_on_verdict).
   std::map<std::uint16_t, std::vector<Keyframe*>> keyframes_before_verdict;
   // Matches each of `points` to the nearest descriptor (within strict_descriptor_distance)
   // among the `candidates` of `features`, seen at T_cw, that lie where it projects within
