@@ -61,8 +61,9 @@ void Tracker::Impl::CreateKeyframe() {
   Keyframe* keyframe = map->AddKeyframe(std::move(owned));
   if (!keyframe->instance.empty()) {
     for (const InstanceJudgement& judgement : result.instances) {
-      const bool unjudged = judgement.moveable_class && !judgement.judged && !judgement.moving;
-      if (unjudged && current.kept_out.count(judgement.id) > 0) keyframes_before_verdict[judgement.id].push_back(keyframe);
+      if (KeptOutUnjudged(judgement) && current.kept_out.count(judgement.id) > 0) {
+        keyframes_before_verdict[judgement.id].push_back(keyframe);
+      }
     }
   }
 
@@ -240,8 +241,7 @@ void Tracker::Impl::LocalBundleAdjustment() {
 void Tracker::Impl::SettleWaitingOutlines(const std::vector<InstanceJudgement>& judgements) {
   for (const InstanceJudgement& judgement : judgements) {
     const auto waiting = waiting_outlines.find(judgement.id);
-    const bool still_unjudged = judgement.moveable_class && !judgement.judged && !judgement.moving;
-    if (waiting == waiting_outlines.end() || still_unjudged) continue;
+    if (waiting == waiting_outlines.end() || KeptOutUnjudged(judgement)) continue;
     for (MapPoint* point : waiting->second) {
       if (point->bad) continue;
       if (judgement.moving) {
@@ -298,8 +298,7 @@ void Tracker::Impl::MapInstancesOnTheirVerdict(const std::vector<InstanceJudgeme
                                                double evidence_since_s) {
   for (const InstanceJudgement& judgement : judgements) {
     const auto found = keyframes_before_verdict.find(judgement.id);
-    const bool still_unjudged = judgement.moveable_class && !judgement.judged && !judgement.moving;
-    if (found == keyframes_before_verdict.end() || still_unjudged) continue;
+    if (found == keyframes_before_verdict.end() || KeptOutUnjudged(judgement)) continue;
     const std::vector<Keyframe*> keyframes = std::move(found->second);
     keyframes_before_verdict.erase(found);
     // Judged moving, what those keyframes saw of it has moved since. Keyframes older than

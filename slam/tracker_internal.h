@@ -204,6 +204,12 @@ struct InstanceMotionMemory {
   double last_measured_stamp_s = -1e9;
 };
 
+// A moveable instance with no verdict yet: kept out of the fine pose and the map until
+// it is judged (KeepOutOfPoseAndMap).
+inline bool KeptOutUnjudged(const InstanceJudgement& judgement) {
+  return judgement.moveable_class && !judgement.judged && !judgement.moving;
+}
+
 struct WorkingFrame {
   int index = -1;
   double stamp_s = 0;
