@@ -31,7 +31,7 @@ namespace {
 
 struct RunArgs {
   std::string dataset;
-  RunConfigWords words;   // --mode, --masks, --segmenter, --seed, --strength
+  RunConfigWords words;   // --mode, --masks, --segmenter, --seed, --strength, --segmenter-option
   DatasetRunOptions run;  // filled by the other options of the same names
   std::string out_dir;
   bool quiet = false;
@@ -161,6 +161,9 @@ void AddRunCommand(CLI::App& app, std::function<int()>* action) {
                   "Scale of the simulated segmenter's errors (0 = ground truth, 1 = the preset, 2 = twice as bad)")
       ->check(NumberIn(0, 10))
       ->capture_default_str();
+  cmd->add_option("--segmenter-option", args->words.segmenter_options,
+                  "Override a field of the simulated segmenter's preset, NAME=VALUE (repeatable; the fields are "
+                  "those of seg/simulated_segmenter_options.h), to tell which of its errors a run depends on");
   cmd->add_option("--map-in", args->run.map_in, "Localize on this long-term map (single sequence)");
   cmd->add_option("--map-out", args->run.map_out, "Write the long-term map here (and a .ply beside it)");
   cmd->add_option("--out,-o", args->out_dir, "Output folder (default DATASET/run_MODE)");

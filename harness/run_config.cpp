@@ -13,9 +13,37 @@ std::string MaskSource::Describe() const {
     case Kind::kNone: return "none";
     case Kind::kGroundTruth: return "gt";
     case Kind::kExternal: return "external " + folder.string();
-    case Kind::kSimulated: return fmt::format("simulated {} seed {}", SimulatedSegmenterLabel(preset, strength), seed);
+    case Kind::kSimulated: {
+      std::string label = fmt::format("simulated {} seed {}", SimulatedSegmenterLabel(preset, strength), seed);
+      if (!overrides.empty()) label += " [" + Join(overrides, ", ") + "]";
+      return label;
+    }
   }
   return "?";
+}
+
+seg::SimulatedSegmenterOptions MaskSource::SimulatedOptions() const {
+  seg::SimulatedSegmenterOptions options = seg::SimulatedSegmenterOptions::Preset(preset);
+  options.strength = strength;
+  for (const std::string& assignment : overrides) options.Set(assignment);
+  if (std::string problem; !options.IsValid(&problem)) throw Error("simulated segmenter: " + problem);
+  return options;
+}
+
+RunConfig RunConfigWords::ToConfig(const std::string& command) const {
+  RunConfig config = MakeRunConfig(command, mode, masks, segmenter, seed, strength);
+  if (segmenter_options.empty()) return config;
+  if (segmenter.empty()) {
+    throw Error(command + ": --segmenter-option sets a simulated segmenter's option: give --segmenter too");
+  }
+  if (config.masks.kind != MaskSource::Kind::kSimulated) return config;  // plain reads no masks
+  config.masks.overrides = segmenter_options;
+  try {
+    config.masks.SimulatedOptions();
+  } catch (const Error& e) {
+    throw Error(command + ": --segmenter-option: " + e.what());
+  }
+  return config;
 }
 
 bool RunConfig::RefinesMasks() const {

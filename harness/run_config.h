@@ -7,8 +7,10 @@
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "mutual/slam_mode.h"
+#include "seg/simulated_segmenter_options.h"
 
 namespace segslam::harness {
 
@@ -24,10 +26,17 @@ struct MaskSource {
   std::string preset;            // kSimulated: a SimulatedSegmenterOptions preset
   std::uint64_t seed = 1;        // kSimulated
   double strength = 1.0;         // kSimulated: scales every error (0 = ground truth, 2 = twice as bad)
+  // kSimulated: fields of the preset set by name, "NAME=VALUE" (SimulatedSegmenterOptions::
+  // Set), to tell which of the segmenter's errors a run's figures depend on.
+  std::vector<std::string> overrides;
 
   // As trajectory headers and messages name it: "none", "gt", "external DIR",
-  // "simulated fcis-like seed 1" (fcis-like@2 where the strength is 2).
+  // "simulated fcis-like seed 1" (fcis-like@2 where the strength is 2; the overrides
+  // follow in brackets: "simulated fcis-like seed 1 [hole_prob=0]").
   std::string Describe() const;
+  // The simulated segmenter's options: the preset, its strength and the overrides.
+  // Throws segslam::Error naming the field on an unknown one or a value out of range.
+  seg::SimulatedSegmenterOptions SimulatedOptions() const;
 };
 
 struct RunConfig {
@@ -57,16 +66,17 @@ RunConfig MakeRunConfig(const std::string& command, const std::string& mode, con
                         const std::string& segmenter, std::uint64_t seed, double strength);
 
 // The words of a command line that say a run's mode and masks (--mode, --masks,
-// --segmenter, --seed, --strength), before MakeRunConfig checks them.
+// --segmenter, --seed, --strength, --segmenter-option), before MakeRunConfig checks them.
 struct RunConfigWords {
   std::string mode = "mutual";
   std::string masks = "gt";
   std::string segmenter;
   std::uint64_t seed = 1;
   double strength = 1.0;
-  RunConfig ToConfig(const std::string& command) const {
-    return MakeRunConfig(command, mode, masks, segmenter, seed, strength);
-  }
+  std::vector<std::string> segmenter_options;  // NAME=VALUE, into MaskSource::overrides
+  // MakeRunConfig, then the overrides: refused without a simulated segmenter, or where
+  // one names no field or sets it out of range.
+  RunConfig ToConfig(const std::string& command) const;
 };
 
 }  // namespace segslam::harness

@@ -66,9 +66,8 @@ std::unique_ptr<seg::Segmenter> MakeSegmenter(const TumSequence& sequence, const
       return std::make_unique<seg::ExternalMaskSegmenter>(masks.folder, sequence,
                                                           static_cast<size_t>(std::max(0, options.max_frames)));
     case MaskSource::Kind::kSimulated: {
-      seg::SimulatedSegmenterOptions preset = seg::SimulatedSegmenterOptions::Preset(masks.preset);
-      preset.strength = masks.strength;
-      return std::make_unique<seg::SimulatedSegmenter>(sequence.dir(), preset, masks.seed, masks.preset);
+      return std::make_unique<seg::SimulatedSegmenter>(sequence.dir(), masks.SimulatedOptions(), masks.seed,
+                                                       masks.preset);
     }
   }
   return nullptr;

@@ -43,4 +43,28 @@ TEST_F(RunCliTest, RefinerOptionsReachTheLoop) {
   EXPECT_EQ(never_added["frames"], by_default["frames"]);
 }
 
+// A field of the simulated segmenter set by name reaches the segmenter: without false
+// positives and with no region bleeding outward, the raw masks paint fewer pixels where
+// the ground truth has none. The run names the override; a wrong one is refused.
+TEST_F(RunCliTest, SegmenterOptionsReachTheSegmenter) {
+  const auto false_pixels = [](const nlohmann::json& seg) {
+    long long pixels = 0;
+    for (const nlohmann::json& category : seg["raw"]["categories"]) pixels += category["fp_pixels"].get<long long>();
+    return pixels;
+  };
+  const nlohmann::json by_default = RunLoopAndReadSegJson("", dir_ / "default");
+  const nlohmann::json tidy = RunLoopAndReadSegJson(
+      "--segmenter-option false_positives_per_frame=0 --segmenter-option bleed_prob=0", dir_ / "tidy");
+  EXPECT_NE(last_.stdout_text.find("seed 2 [false_positives_per_frame=0, bleed_prob=0]"), std::string::npos)
+      << last_.stdout_text;
+  EXPECT_LT(false_pixels(tidy), false_pixels(by_default) / 2);
+
+  const fs::path sequence = kDataDir / "office_seg" / "pass1";
+  const CommandOutput unknown = Run("run " + sequence.string() + " --segmenter fcis-like --segmenter-option " +
+                                    "hole_size=3 -q --out " + (dir_ / "unknown").string());
+  EXPECT_EQ(unknown.exit_code, 1);
+  EXPECT_NE(unknown.stderr_text.find("hole_size"), std::string::npos) << unknown.stderr_text;
+  EXPECT_FALSE(fs::exists(dir_ / "unknown"));
+}
+
 }  // namespace

@@ -65,6 +65,46 @@ TEST(RunConfigTest, RefusalsNameTheCommandAndTheRule) {
   EXPECT_EQ(Refusal("mutual", "gt", "fcis-like", 0), "");
 }
 
+// Fields of the simulated segmenter's preset set by name: applied over the preset and its
+// strength, named in the description, refused without a simulated segmenter, on an unknown
+// field or out of range.
+TEST(RunConfigTest, SegmenterOptionsOverrideThePresetByName) {
+  RunConfigWords words;
+  words.segmenter = "fcis-like";
+  words.strength = 2.0;
+  words.segmenter_options = {"hole_prob=0", "boundary_jitter_px=3"};
+  const RunConfig config = words.ToConfig("run");
+  EXPECT_EQ(config.masks.Describe(), "simulated fcis-like@2 seed 1 [hole_prob=0, boundary_jitter_px=3]");
+  const seg::SimulatedSegmenterOptions options = config.masks.SimulatedOptions();
+  const seg::SimulatedSegmenterOptions preset = seg::SimulatedSegmenterOptions::Preset("fcis-like");
+  EXPECT_EQ(options.hole_prob, 0.0);
+  EXPECT_EQ(options.boundary_jitter_px, 3.0);
+  EXPECT_EQ(options.cut_prob, preset.cut_prob) << "a field not named keeps the preset's value";
+  EXPECT_EQ(options.strength, 2.0);
+
+  const auto refusal = [&](RunConfigWords changed) {
+    try {
+      changed.ToConfig("run");
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  RunConfigWords no_segmenter = words;
+  no_segmenter.segmenter.clear();
+  no_segmenter.strength = 1.0;
+  EXPECT_NE(refusal(no_segmenter).find("run: --segmenter-option"), std::string::npos);
+  RunConfigWords unknown = words;
+  unknown.segmenter_options = {"hole_size=3"};
+  EXPECT_NE(refusal(unknown).find("hole_size"), std::string::npos);
+  RunConfigWords out_of_range = words;
+  out_of_range.segmenter_options = {"miss_prob=2"};
+  EXPECT_NE(refusal(out_of_range).find("miss_prob"), std::string::npos) << refusal(out_of_range);
+  RunConfigWords plain = words;
+  plain.mode = "plain";
+  EXPECT_EQ(plain.ToConfig("run").masks.kind, MaskSource::Kind::kNone) << "plain reads no masks, whatever was given";
+}
+
 // A scenario's runs: the segmenter for mask-moveable and mutual, the ground truth for the
 // oracle, nothing for plain; the strength only where a segmenter runs.
 TEST(RunConfigTest, ScenarioRunsTakeTheirMasksFromTheBenchSettings) {
