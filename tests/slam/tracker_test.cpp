@@ -742,6 +742,65 @@ TEST(TrackerTest, InstanceJudgedStillIsMappedInTheKeyframesThatKeptItOut) {
   }
 }
 
+// Only a map's founding keyframes (its first motion_baseline_s) map an instance on its
+// verdict. An instance first seen later (here the still box, a fixed-class instance until
+// frame 10 and a new moveable track from then on) is left to the keyframes after its
+// verdict: the keyframes made while it waited keep nothing of it, and no point of it is
+// seen by one of them. (Mapped in every keyframe, it cost the boulevard: docs/results.md,
+// "Mapping an instance on its verdict".)
+TEST(TrackerTest, InstanceFirstSeenAfterTheMapsStartIsLeftToTheKeyframesAfterItsVerdict) {
+  const PinholeCamera camera = TestCamera();
+  constexpr int kNewTrackFrame = 10;
+  constexpr std::uint16_t kEarlierId = 3;
+  TrackerOptions options = StartingAt(HandHeldPathPose(0));
+  // From depth the new track would be judged on its first frame (its pixels carried back
+  // into the frame a baseline before find it there); re-found features wait a baseline.
+  options.judge_by_depth = false;
+  ASSERT_TRUE(options.map_instances_on_verdict);
+  ASSERT_GT(kNewTrackFrame / 30.0, options.motion_baseline_s);
+  Tracker tracker(camera, options);
+  FrameInstances instances;
+  instances.moveable_ids = {1, 2};
+  int verdict_frame = -1;
+  std::set<std::uint64_t> keyframes_while_waiting;
+  int most_features_kept_out_of_one = 0;  // the new track's, on a keyframe made while it waited
+  for (int i = 0; i < 30 && verdict_frame < 0; ++i) {
+    const auto rendered = RenderSlidingAndStillBox(camera, i);
+    instances.ids = rendered.instance_ids.clone();
+    if (i < kNewTrackFrame) instances.ids.setTo(kEarlierId, instances.ids == 2);
+    const size_t keyframes_before = tracker.map().keyframes().size();
+    const FrameResult result = TrackJudging(tracker, rendered.frame, instances);
+    ASSERT_TRUE(result.localized()) << "frame " << i;
+    const auto new_track = std::find_if(result.instances.begin(), result.instances.end(),
+                                        [](const InstanceJudgement& j) { return j.id == 2; });
+    if (new_track == result.instances.end()) continue;
+    if (new_track->judged) {
+      EXPECT_FALSE(new_track->moving);
+      verdict_frame = i;
+    } else if (tracker.map().keyframes().size() > keyframes_before) {
+      keyframes_while_waiting.insert(tracker.map().keyframes().back()->id);
+      most_features_kept_out_of_one = std::max(most_features_kept_out_of_one, new_track->num_features);
+    }
+  }
+  ASSERT_GT(verdict_frame, kNewTrackFrame);
+  ASSERT_FALSE(keyframes_while_waiting.empty()) << "no keyframe came while the new track waited: nothing tested";
+  ASSERT_GE(most_features_kept_out_of_one, 20) << "the keyframes that waited had little of the box to map";
+  for (const auto& keyframe : tracker.map().keyframes()) {
+    if (keyframes_while_waiting.count(keyframe->id) == 0) continue;
+    EXPECT_TRUE(keyframe->instance.empty()) << "the keyframe of frame " << keyframe->frame_index
+                                            << " remembered the instances it kept out";
+  }
+  // The box's points, of either track, on the frame of the verdict.
+  for (const auto& point : tracker.map().points()) {
+    if (point->bad || (point->instance_id != 2 && point->instance_id != kEarlierId)) continue;
+    for (const auto& [keyframe, index] : point->observations) {
+      EXPECT_EQ(keyframes_while_waiting.count(keyframe->id), 0u)
+          << "a point of the box is seen by the keyframe of frame " << keyframe->frame_index
+          << ", made while its new track waited for its verdict (frame " << verdict_frame << ")";
+    }
+  }
+}
+
 // The oracle takes the verdicts it is given, whatever the motion measures: told that
 // the still box moves and the sliding one stands, it keeps the still box out of the pose
 // and map and maps the sliding one.
