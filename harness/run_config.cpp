@@ -57,6 +57,10 @@ std::string SimulatedSegmenterLabel(const std::string& preset, double strength) 
   return strength == 1.0 ? preset : fmt::format("{}@{}", preset, strength);
 }
 
+std::string PresetWithOverrides(const std::string& preset, const std::vector<std::string>& overrides) {
+  return overrides.empty() ? preset : preset + "[" + Join(overrides, ",") + "]";
+}
+
 RunConfig MakeRunConfig(const std::string& command, const std::string& mode, const std::string& masks,
                         const std::string& segmenter, std::uint64_t seed, double strength) {
   const std::string where = command + ": ";

@@ -55,6 +55,10 @@ struct RunConfig {
 // errors are scaled (as SimulatedSegmenter::name() writes the strength).
 std::string SimulatedSegmenterLabel(const std::string& preset, double strength);
 
+// A simulated segmenter preset with fields set by name, as its masks' files name it
+// (SimulatedSegmenter::name(), seg.json): "fcis-like", "fcis-like[hole_prob=0,cut_prob=0]".
+std::string PresetWithOverrides(const std::string& preset, const std::vector<std::string>& overrides);
+
 // The one check of a run's mode and masks, from a command's words: `masks` is "gt" or a
 // folder of external masks, `segmenter` a simulated segmenter preset or empty. Plain reads
 // no masks, so it gets MaskSource::kNone whatever was given. Throws segslam::Error

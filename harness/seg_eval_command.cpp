@@ -12,6 +12,7 @@
 #include "harness/interrupt.h"
 #include "harness/pictures.h"
 #include "harness/progress_bar.h"
+#include "harness/run_config.h"
 #include "seg/external_masks.h"
 #include "seg/metrics.h"
 #include "seg/refiner.h"
@@ -74,7 +75,8 @@ seg::SequenceSegEval EvaluateSequence(const SegEvalArgs& args, const fs::path& d
     seg::SimulatedSegmenterOptions options = seg::SimulatedSegmenterOptions::Preset(args.segmenter);
     options.strength = args.strength;
     for (const std::string& assignment : args.segmenter_options) options.Set(assignment);
-    segmenter = std::make_unique<seg::SimulatedSegmenter>(dir, options, args.seed, args.segmenter);
+    segmenter = std::make_unique<seg::SimulatedSegmenter>(dir, options, args.seed,
+                                                          PresetWithOverrides(args.segmenter, args.segmenter_options));
   }
 
   seg::SegEvalOptions options;

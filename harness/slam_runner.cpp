@@ -67,7 +67,7 @@ std::unique_ptr<seg::Segmenter> MakeSegmenter(const TumSequence& sequence, const
                                                           static_cast<size_t>(std::max(0, options.max_frames)));
     case MaskSource::Kind::kSimulated: {
       return std::make_unique<seg::SimulatedSegmenter>(sequence.dir(), masks.SimulatedOptions(), masks.seed,
-                                                       masks.preset);
+                                                       PresetWithOverrides(masks.preset, masks.overrides));
     }
   }
   return nullptr;

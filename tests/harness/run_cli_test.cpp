@@ -58,6 +58,7 @@ TEST_F(RunCliTest, SegmenterOptionsReachTheSegmenter) {
   EXPECT_NE(last_.stdout_text.find("seed 2 [false_positives_per_frame=0, bleed_prob=0]"), std::string::npos)
       << last_.stdout_text;
   EXPECT_LT(false_pixels(tidy), false_pixels(by_default) / 2);
+  EXPECT_EQ(tidy["segmenter"], "simulated:fcis-like[false_positives_per_frame=0,bleed_prob=0]");
 
   const fs::path sequence = kDataDir / "office_seg" / "pass1";
   const CommandOutput unknown = Run("run " + sequence.string() + " --segmenter fcis-like --segmenter-option " +

@@ -81,6 +81,8 @@ TEST(RunConfigTest, SegmenterOptionsOverrideThePresetByName) {
   EXPECT_EQ(options.boundary_jitter_px, 3.0);
   EXPECT_EQ(options.cut_prob, preset.cut_prob) << "a field not named keeps the preset's value";
   EXPECT_EQ(options.strength, 2.0);
+  EXPECT_EQ(PresetWithOverrides("fcis-like", words.segmenter_options), "fcis-like[hole_prob=0,boundary_jitter_px=3]");
+  EXPECT_EQ(PresetWithOverrides("poor", {}), "poor");
 
   const auto refusal = [&](RunConfigWords changed) {
     try {
