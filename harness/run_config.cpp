@@ -22,10 +22,16 @@ std::string MaskSource::Describe() const {
   return "?";
 }
 
-seg::SimulatedSegmenterOptions MaskSource::SimulatedOptions() const {
+seg::SimulatedSegmenterOptions SimulatedSegmenterOptionsFor(const std::string& preset, double strength,
+                                                            const std::vector<std::string>& overrides) {
   seg::SimulatedSegmenterOptions options = seg::SimulatedSegmenterOptions::Preset(preset);
   options.strength = strength;
   for (const std::string& assignment : overrides) options.Set(assignment);
+  return options;
+}
+
+seg::SimulatedSegmenterOptions MaskSource::SimulatedOptions() const {
+  const seg::SimulatedSegmenterOptions options = SimulatedSegmenterOptionsFor(preset, strength, overrides);
   if (std::string problem; !options.IsValid(&problem)) throw Error("simulated segmenter: " + problem);
   return options;
 }

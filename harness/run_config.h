@@ -55,6 +55,12 @@ struct RunConfig {
 // errors are scaled (as SimulatedSegmenter::name() writes the strength).
 std::string SimulatedSegmenterLabel(const std::string& preset, double strength);
 
+// A simulated segmenter preset at `strength` with fields set by name ("NAME=VALUE",
+// SimulatedSegmenterOptions::Set, which throws naming an unknown field); ranges are not
+// checked here (SimulatedSegmenterOptions::IsValid).
+seg::SimulatedSegmenterOptions SimulatedSegmenterOptionsFor(const std::string& preset, double strength,
+                                                            const std::vector<std::string>& overrides);
+
 // A simulated segmenter preset with fields set by name, as its masks' files name it
 // (SimulatedSegmenter::name(), seg.json): "fcis-like", "fcis-like[hole_prob=0,cut_prob=0]".
 std::string PresetWithOverrides(const std::string& preset, const std::vector<std::string>& overrides);

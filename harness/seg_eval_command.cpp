@@ -72,9 +72,8 @@ seg::SequenceSegEval EvaluateSequence(const SegEvalArgs& args, const fs::path& d
   if (!args.masks_dir.empty()) {
     segmenter = std::make_unique<seg::ExternalMaskSegmenter>(args.masks_dir, TumSequence::Open(dir));
   } else {
-    seg::SimulatedSegmenterOptions options = seg::SimulatedSegmenterOptions::Preset(args.segmenter);
-    options.strength = args.strength;
-    for (const std::string& assignment : args.segmenter_options) options.Set(assignment);
+    const seg::SimulatedSegmenterOptions options =
+        SimulatedSegmenterOptionsFor(args.segmenter, args.strength, args.segmenter_options);
     segmenter = std::make_unique<seg::SimulatedSegmenter>(dir, options, args.seed,
                                                           PresetWithOverrides(args.segmenter, args.segmenter_options));
   }

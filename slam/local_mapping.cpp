@@ -52,8 +52,7 @@ void Tracker::Impl::CreateKeyframe() {
   // A map's founding keyframes, made while no instance can be judged yet (its first
   // motion_baseline_s), keep every moveable instance in view out; they remember what they
   // kept out, to map it on its verdict (TrackerOptions::map_instances_on_verdict).
-  const bool at_start = current.stamp_s - first_frame_stamp_s < options.motion_baseline_s - 1e-6;
-  if (options.map_instances_on_verdict && at_start && !current.kept_out.empty()) {
+  if (options.map_instances_on_verdict && AtMapStart() && !current.kept_out.empty()) {
     owned->instance = current.instance;
     owned->color_rgb.reserve(current.features.size());
     for (const cv::KeyPoint& kp : current.features.keypoints) owned->color_rgb.push_back(ColorAt(kp));

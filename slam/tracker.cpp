@@ -254,9 +254,8 @@ std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& ins
       by_depth && !s.history.empty() && !s.history.front().depth_m.empty() ? &s.history.front() : nullptr;
   const bool depth_full_baseline =
       past != nullptr && s.current.stamp_s - past->stamp_s >= options_.motion_baseline_s - 1e-6;
-  const bool at_start = s.current.stamp_s - s.first_frame_stamp_s < options_.motion_baseline_s - 1e-6;
-  const bool margin_around_unjudged =
-      options_.instance_margin_around_unjudged && (options_.instance_margin_around_unjudged_at_start || !at_start);
+  const bool margin_around_unjudged = options_.instance_margin_around_unjudged &&
+                                      (options_.instance_margin_around_unjudged_at_start || !s.AtMapStart());
   std::vector<InstanceJudgement> judgements;
   for (const auto& [id, features] : features_of) {
     InstanceJudgement judgement;

@@ -258,6 +258,9 @@ struct Tracker::Impl {
   bool initialized = false;
   // Stamp of the first frame of this state: the run, or a map begun anew after a reset.
   double first_frame_stamp_s = std::numeric_limits<double>::quiet_NaN();
+  // The current frame lies in the map's first motion_baseline_s, when no instance can be
+  // judged yet (the depth judgement needs a frame a baseline back to see one still).
+  bool AtMapStart() const { return current.stamp_s - first_frame_stamp_s < options.motion_baseline_s - 1e-6; }
   bool pending_first_keyframe = false;
   bool last_status_lost = false;
   double lost_since_s = -1;  // stamp of the first frame of the current run of lost frames
