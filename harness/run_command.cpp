@@ -71,6 +71,18 @@ void PrintMapResets(const std::vector<PassRun>& passes) {
   }
 }
 
+// A pass's start tracked again once its instances were judged (slam::TrackerOptions::
+// retrack_map_start) changes its first poses, so it is said too.
+void PrintRetrackedStarts(const std::vector<PassRun>& passes) {
+  for (const PassRun& pass : passes) {
+    const auto retracked = std::count_if(pass.run.frames.begin(), pass.run.frames.end(),
+                                         [](const slam::FrameResult& frame) { return frame.retracked; });
+    if (retracked == 0) continue;
+    fmt::print("{}: its first {} frames were tracked again once their instances were judged, with what stood still in view\n",
+               pass.name, retracked);
+  }
+}
+
 std::string Points(double value) { return std::isnan(value) ? "  n/a" : fmt::format("{:5.1f}", 100 * value); }
 
 // The segmentation-in-the-loop table, as seg-eval prints it with ground-truth poses.
@@ -132,6 +144,7 @@ int RunRun(const RunArgs& args) {
              "localized", "keyframes", "points", "track ms", "ATE rmse m", "ATE max m");
   for (const PassRun& pass : passes) PrintPass(pass, name_width);
   PrintMapResets(passes);
+  PrintRetrackedStarts(passes);
   PrintLoopSegmentation(passes);
   fmt::print("outputs in {}\n", out_dir.string());
   return 0;

@@ -1,6 +1,8 @@
 #include "mutual/frame_pipeline.h"
 
 #include <chrono>
+#include <unordered_map>
+#include <unordered_set>
 #include <utility>
 
 #include "core/coco.h"
@@ -37,7 +39,7 @@ FramePipeline::FramePipeline(const PinholeCamera& camera, const FramePipelineOpt
       options_(options),
       segmenter_(segmenter),
       motion_(motion),
-      tracker_(camera, TrackerOptionsFor(options)),
+      tracker_(std::make_unique<slam::Tracker>(camera, TrackerOptionsFor(options))),
       refiner_(options.refiner) {
   const std::string mode = ToString(options.mode);
   if (UsesMasks(options.mode) && segmenter == nullptr) throw Error("mode " + mode + " needs instance masks");
@@ -46,10 +48,13 @@ FramePipeline::FramePipeline(const PinholeCamera& camera, const FramePipelineOpt
   }
   std::string error;
   if (RefinesMasks() && !options.refiner.IsValid(&error)) throw Error("mutual loop: refiner options: " + error);
+  // The oracle knows every verdict from the first frame; plain and mask-moveable judge nothing.
+  at_start_ = options.tracker.retrack_map_start && JudgesInstances(options.mode) && options.mode != SlamMode::kOracle;
 }
 
 void FramePipeline::LoadLongTermMap(const slam::LongTermMapData& map, const std::string& origin) {
-  tracker_.LoadLongTermMap(map, origin);
+  tracker_->LoadLongTermMap(map, origin);
+  long_term_map_origin_ = origin;
 }
 
 FrameStep FramePipeline::ProcessFrame(const RgbdFrame& frame) {
@@ -63,11 +68,11 @@ FrameStep FramePipeline::ProcessFrame(const RgbdFrame& frame) {
     step.initial.frame_index = frame.index;
     step.segment_ms = MillisecondsSince(segment_start);
   }
-  tracker_.BeginFrame(frame);
-  if (mode == SlamMode::kMaskMoveable) tracker_.DropMoveableFeatures(ToFrameInstances(step.initial, size));
+  tracker_->BeginFrame(frame);
+  if (mode == SlamMode::kMaskMoveable) tracker_->DropMoveableFeatures(ToFrameInstances(step.initial, size));
 
   // 2. Coarse pose from every feature left.
-  const std::optional<Eigen::Isometry3d> T_wc_coarse = tracker_.EstimateCoarsePose();
+  const std::optional<Eigen::Isometry3d> T_wc_coarse = tracker_->EstimateCoarsePose();
 
   // 3. The refinement, with the coarse pose.
   if (RefinesMasks()) {
@@ -77,17 +82,19 @@ FrameStep FramePipeline::ProcessFrame(const RgbdFrame& frame) {
   }
 
   // 4. Moving/static judgement on the refined instances, fine pose, maps.
+  slam::FrameInstances instances;
   if (JudgesInstances(mode)) {
-    const slam::FrameInstances instances = ToFrameInstances(step.refined, size);
+    instances = ToFrameInstances(step.refined, size);
     if (mode == SlamMode::kOracle) {
-      tracker_.JudgeInstances(instances, &motion_->MovingIds(frame.index));
+      tracker_->JudgeInstances(instances, &motion_->MovingIds(frame.index));
     } else {
-      tracker_.JudgeInstances(instances);
+      tracker_->JudgeInstances(instances);
     }
   }
-  tracker_.EstimateFinePose();
-  step.slam = tracker_.UpdateMaps();
+  tracker_->EstimateFinePose();
+  step.slam = tracker_->UpdateMaps();
   Record(step.slam);
+  if (at_start_) RememberMapStart(frame, instances, &step);
 
   // 5. What frame t+1's refinement needs.
   if (RefinesMasks()) {
@@ -99,6 +106,75 @@ FrameStep FramePipeline::ProcessFrame(const RgbdFrame& frame) {
   return step;
 }
 
+void FramePipeline::RememberMapStart(const RgbdFrame& frame, const slam::FrameInstances& instances,
+                                     FrameStep* step) {
+  StartFrame kept;
+  kept.frame = frame;
+  kept.frame.color_bgr = frame.color_bgr.clone();  // the caller may reuse the frame's buffers
+  kept.frame.depth_m = frame.depth_m.clone();
+  kept.instances = instances;  // made for this frame (ToFrameInstances), shared with no one
+  start_frames_.push_back(std::move(kept));
+  if (frame.stamp_s - start_frames_.front().frame.stamp_s < options_.tracker.motion_baseline_s - 1e-6) return;
+  at_start_ = false;
+  if (StartWorthRetracking()) RetrackMapStart(step);
+  start_frames_ = {};
+}
+
+// Only a still verdict changes what the start would have been: an instance judged moving
+// was kept out all the same while it waited. A start with a lost frame is left as it was:
+// its map did not begin on the pass's first frame, or the pass began off the loaded map.
+bool FramePipeline::StartWorthRetracking() const {
+  for (const slam::FrameResult& result : frames_) {
+    if (!result.localized() || result.map_reset) return false;
+  }
+  std::unordered_set<std::uint16_t> kept_out_unjudged;
+  for (size_t k = 0; k + 1 < frames_.size(); ++k) {
+    for (const slam::InstanceJudgement& judgement : frames_[k].instances) {
+      if (judgement.moveable_class && !judgement.judged) kept_out_unjudged.insert(judgement.id);
+    }
+  }
+  for (const slam::InstanceJudgement& judgement : frames_.back().instances) {
+    if (judgement.judged && !judgement.moving && kept_out_unjudged.count(judgement.id) > 0) return true;
+  }
+  return false;
+}
+
+void FramePipeline::RetrackMapStart(FrameStep* step) {
+  auto retracked = std::make_unique<slam::Tracker>(camera_, TrackerOptionsFor(options_));
+  if (tracker_->localization_mode()) {
+    retracked->LoadLongTermMap(tracker_->ExportLongTermMap(/*include_instances=*/false), long_term_map_origin_);
+  }
+  std::unordered_map<std::uint16_t, bool> moving_by_id;
+  for (const slam::InstanceJudgement& judgement : frames_.back().instances) {
+    if (judgement.judged) moving_by_id[judgement.id] = judgement.moving;
+  }
+  // The last frame of the start judges on its own evidence again.
+  retracked->PresetStartVerdicts(std::move(moving_by_id), start_frames_.back().frame.stamp_s);
+  const std::vector<slam::FrameResult> first_tries = std::move(frames_);
+  frames_.clear();
+  trajectory_.clear();
+  for (size_t k = 0; k < start_frames_.size(); ++k) {
+    const StartFrame& kept = start_frames_[k];
+    retracked->BeginFrame(kept.frame);
+    retracked->EstimateCoarsePose();
+    retracked->JudgeInstances(kept.instances);
+    retracked->EstimateFinePose();
+    slam::FrameResult result = retracked->UpdateMaps();
+    result.retracked = true;
+    // The frame was tracked twice, and its time is both.
+    const slam::FrameTimings& first = first_tries[k].timings;
+    result.timings.features_ms += first.features_ms;
+    result.timings.coarse_ms += first.coarse_ms;
+    result.timings.judge_ms += first.judge_ms;
+    result.timings.fine_ms += first.fine_ms;
+    result.timings.map_update_ms += first.map_update_ms;
+    result.timings.bundle_adjustment_ms += first.bundle_adjustment_ms;
+    Record(result);
+  }
+  tracker_ = std::move(retracked);
+  step->slam = frames_.back();
+}
+
 void FramePipeline::Refine(const RgbdFrame& frame, const std::optional<Eigen::Isometry3d>& T_wc_coarse,
                            FrameStep* step) {
   const auto refine_start = std::chrono::steady_clock::now();
@@ -108,7 +184,7 @@ void FramePipeline::Refine(const RgbdFrame& frame, const std::optional<Eigen::Is
   // No projection without both poses in one frame; Refine then returns the initial
   // regions with fresh ids, as on the first frame.
   const bool can_project = previous_refined_.has_value() && previous_T_wc_fine_.has_value() &&
-                           T_wc_coarse.has_value() && !tracker_.CoarsePoseRelocalized() &&
+                           T_wc_coarse.has_value() && !tracker_->CoarsePoseRelocalized() &&
                            !previous_depth_m_.empty();
   if (can_project) {
     input.previous_refined = &*previous_refined_;
@@ -136,7 +212,7 @@ void FramePipeline::Record(const slam::FrameResult& frame) {
 }
 
 slam::LongTermMapData FramePipeline::ExportLongTermMap() const {
-  return tracker_.ExportLongTermMap(/*include_instances=*/!JudgesInstances(options_.mode));
+  return tracker_->ExportLongTermMap(/*include_instances=*/!JudgesInstances(options_.mode));
 }
 
 }  // namespace segslam::mutual

@@ -20,11 +20,19 @@
 // Moving objects are projected with the camera's motion only, as in the paper: an own
 // rigid motion per moving instance gained nothing measurable (docs/tuning.md).
 //
+// A pass's start is judged in hindsight (TrackerOptions::retrack_map_start): nothing can
+// be judged in its first motion_baseline_s, so every moveable instance in view is kept out
+// of the founding keyframes. At the first frame a baseline on, if an instance kept out
+// unjudged there is now judged still, those frames are tracked again from the start by a
+// fresh tracker given the verdicts (slam::Tracker::PresetStartVerdicts), with the same
+// refined masks; their results replace the first ones in frames() and trajectory().
+//
 // The pipeline also keeps the run's record: each frame's result, and the trajectory of
 // the localized frames. A map reset voids the poses before it (they are in the frame of
 // a map that no longer exists), so those frames count as lost, as ORB-SLAM2 forgets them.
 #pragma once
 
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -100,19 +108,34 @@ class FramePipeline {
   // a moveable one (TrackerOptions::long_term_map_keeps_fixed_instances).
   slam::LongTermMapData ExportLongTermMap() const;
 
-  const slam::Tracker& tracker() const { return tracker_; }
+  const slam::Tracker& tracker() const { return *tracker_; }
   const FramePipelineOptions& options() const { return options_; }
 
  private:
   bool RefinesMasks() const { return IsMutualLoop(options_.mode) && options_.refine_masks; }
   void Refine(const RgbdFrame& frame, const std::optional<Eigen::Isometry3d>& T_wc_coarse, FrameStep* step);
   void Record(const slam::FrameResult& frame);
+  // The map's start in hindsight (file comment): keeps frame t while the start lasts and,
+  // at its end, re-tracks it where a verdict would change it (step->slam becomes the
+  // re-tracked result of frame t).
+  void RememberMapStart(const RgbdFrame& frame, const slam::FrameInstances& instances, FrameStep* step);
+  bool StartWorthRetracking() const;
+  void RetrackMapStart(FrameStep* step);
+
+  struct StartFrame {
+    RgbdFrame frame;                  // its own copy of the images
+    slam::FrameInstances instances;   // the refined instances the tracker judged
+  };
 
   PinholeCamera camera_;
   FramePipelineOptions options_;
   seg::Segmenter* segmenter_;
   const seg::GroundTruthMotion* motion_;
-  slam::Tracker tracker_;
+  std::unique_ptr<slam::Tracker> tracker_;  // replaced when the start is re-tracked
+  std::string long_term_map_origin_;
+  // The pass's first motion_baseline_s, while it lasts (RememberMapStart).
+  std::vector<StartFrame> start_frames_;
+  bool at_start_ = false;
   seg::SegmentationRefiner refiner_;
   // Frame t-1, for the refinement of frame t.
   std::optional<seg::FrameSegmentation> previous_refined_;

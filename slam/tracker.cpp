@@ -230,6 +230,11 @@ std::optional<Eigen::Isometry3d> Tracker::EstimateCoarsePose() {
 
 bool Tracker::CoarsePoseRelocalized() const { return impl_->result.status == TrackingStatus::kRelocalized; }
 
+void Tracker::PresetStartVerdicts(std::unordered_map<std::uint16_t, bool> moving_by_id, double until_stamp_s) {
+  impl_->preset_moving = std::move(moving_by_id);
+  impl_->preset_until_s = until_stamp_s;
+}
+
 std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& instances,
                                                        const std::unordered_set<std::uint16_t>* given_moving_ids) {
   Impl& s = *impl_;
@@ -307,6 +312,12 @@ std::vector<InstanceJudgement> Tracker::JudgeInstances(const FrameInstances& ins
       } else {
         s.DecideMotion(full_baseline, evidence, &judgement);
         s.ApplyMotionMemory(full_baseline, &judgement, &memory);
+      }
+    }
+    if (!judgement.judged && s.current.stamp_s < s.preset_until_s) {
+      if (const auto preset = s.preset_moving.find(id); preset != s.preset_moving.end()) {
+        judgement.judged = true;
+        judgement.moving = preset->second;
       }
     }
     s.KeepOutOfPoseAndMap(judgement, features);

@@ -31,6 +31,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <unordered_map>
 #include <unordered_set>
 #include <vector>
 
@@ -126,6 +127,9 @@ struct FrameResult {
   // reset_map_keyframes): the poses of the frames before it are in a frame that no longer
   // exists, and a caller keeping them should count those frames lost.
   bool map_reset = false;
+  // The frame was tracked a second time, from the pass's start, with verdicts given in
+  // hindsight (TrackerOptions::retrack_map_start); this is the second result.
+  bool retracked = false;
   std::vector<InstanceJudgement> instances;
   FrameTimings timings;
   bool localized() const { return status != TrackingStatus::kLost; }
@@ -296,6 +300,13 @@ struct TrackerOptions {
   // mapped from all of them on one frame's still verdict, a wrong verdict costs more
   // than the map gains (docs/results.md, "Mapping an instance on its verdict").
   bool map_instances_on_verdict = true;
+  // Read by the frame pipeline (mutual/frame_pipeline.h), not the tracker: once the first
+  // motion_baseline_s of a pass is over and an instance kept out of it unjudged is judged
+  // still, those frames are tracked again from the pass's start by a fresh tracker that
+  // knows the verdicts (PresetStartVerdicts). Nothing can be judged in a map's first
+  // baseline, so whatever stood still in view there (people sitting at a desk) is
+  // otherwise missing from the founding keyframes, and the map begins on the rest alone.
+  bool retrack_map_start = true;
   // An instance of a class that does not move (not on the moveable shortlist: a traffic
   // light, a bench, a hydrant) is judged moving only on at least this many measured
   // points. Its few matches are often wrong in a consistent way (a traffic light's three
@@ -381,6 +392,11 @@ class Tracker {
   // exactly when its id is in the set.
   std::vector<InstanceJudgement> JudgeInstances(const FrameInstances& instances,
                                                 const std::unordered_set<std::uint16_t>* given_moving_ids = nullptr);
+  // Verdicts given in hindsight for a pass's first frames (TrackerOptions::
+  // retrack_map_start): on frames stamped before `until_stamp_s`, an instance its own
+  // evidence has not judged yet takes its verdict from `moving_by_id` (true: moving)
+  // where that has one. Its own verdict, once it has one, wins.
+  void PresetStartVerdicts(std::unordered_map<std::uint16_t, bool> moving_by_id, double until_stamp_s);
   // Step 4. Without JudgeInstances it equals the coarse pose.
   std::optional<Eigen::Isometry3d> EstimateFinePose();
   // Step 5; returns the frame's result (timings, status, judgements).

@@ -18,6 +18,7 @@
 #include <memory>
 #include <optional>
 #include <set>
+#include <unordered_map>
 #include <unordered_set>
 #include <vector>
 
@@ -291,6 +292,9 @@ struct Tracker::Impl {
   size_t own_index_map_size = 0;
   std::deque<InstanceSnapshot> history;
   std::map<std::uint16_t, InstanceMotionMemory> motion_memory;  // per instance id
+  // Tracker::PresetStartVerdicts.
+  std::unordered_map<std::uint16_t, bool> preset_moving;
+  double preset_until_s = -std::numeric_limits<double>::infinity();
   std::vector<MapPoint*> recent_points;
   // Points made on the outline of an instance not judged yet (MapPoint::
   // bordered_unjudged_instance), by instance: they wait for its verdict.

@@ -54,6 +54,7 @@ const OptionRegistry<TrackerOptions>& TrackerOptionRegistry() {
       SWITCH(instance_margin_around_unjudged, "the margin also goes around instances kept out as not judged yet"),
       SWITCH(instance_margin_around_unjudged_at_start, "that margin also in a run's first motion_baseline_s, when none can be judged"),
       SWITCH(map_instances_on_verdict, "an instance judged still is mapped in a map's first keyframes that kept it out unjudged"),
+      SWITCH(retrack_map_start, "a pass's first motion_baseline_s is tracked again with the verdicts at its end (mutual pipeline)"),
       REAL(moving_share_threshold, Closed(0, 1), "", "an instance moves when this share of its measured features does"),
       WHOLE(min_points_to_move_fixed_class, AtLeast(1), "", "measured points a class that does not move needs to be moving"),
       WHOLE(moving_streak_frames, AtLeast(1), "", "frames in a row measured moving after which an instance stays moving"),

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <map>
 #include <set>
 
@@ -342,6 +343,112 @@ TEST(MutualLoopTest, MutualSparseJudgesFromFeaturesAndMutualFromDepth) {
   const int depth = most_measured(SlamMode::kMutual, &depth_features);
   EXPECT_GT(sparse, 0);
   EXPECT_GT(depth, 2 * depth_features) << "depth samples, both ways, outnumber the car's features";
+}
+
+// One instance of a moveable class in the room of RoomQuads(5) along SwayingPose, seen
+// by the ground truth's segmenter; `volume_at(i)` is where it stands in frame i.
+struct OneInstanceScene {
+  static constexpr std::uint16_t kRenderedId = 2;
+  std::vector<RenderedFrame> frames;
+  OneInstanceScene(const PinholeCamera& camera, int num_frames, const std::function<Volume(int)>& volume_at) {
+    const auto room = RoomQuads(5);
+    for (int i = 0; i < num_frames; ++i) {
+      auto scene = room;
+      const auto box = BoxQuads(volume_at(i).min, volume_at(i).max, 77, kRenderedId);
+      scene.insert(scene.end(), box.begin(), box.end());
+      frames.push_back(RenderQuads(scene, camera, SwayingPose(i), i, i / 30.0));
+    }
+  }
+};
+
+struct PassOutcome {
+  std::vector<slam::FrameResult> frames;
+  size_t trajectory_size = 0;
+  int instance_points_from_the_first_frame = 0;  // the instance's map points made at frame 0
+  slam::LongTermMapData long_term;
+};
+
+PassOutcome RunPass(const PinholeCamera& camera, const OneInstanceScene& scene, int category, bool retrack_map_start,
+                    const slam::LongTermMapData* long_term_map = nullptr) {
+  GroundTruthSegmenter segmenter(scene.frames, {{OneInstanceScene::kRenderedId, category}});
+  FramePipelineOptions options;
+  options.tracker.initial_T_wc = SwayingPose(0);
+  options.tracker.retrack_map_start = retrack_map_start;
+  FramePipeline loop(camera, options, &segmenter);
+  if (long_term_map != nullptr) loop.LoadLongTermMap(*long_term_map, "pass 1");
+  for (const RenderedFrame& frame : scene.frames) loop.ProcessFrame(frame.frame);
+  PassOutcome outcome;
+  outcome.frames = loop.frames();
+  outcome.trajectory_size = loop.trajectory().size();
+  for (const auto& point : loop.tracker().map().points()) {
+    outcome.instance_points_from_the_first_frame +=
+        !point->bad && point->instance_id != 0 && point->first_stamp_s < 1e-9;
+  }
+  outcome.long_term = loop.ExportLongTermMap();
+  return outcome;
+}
+
+// TrackerOptions::retrack_map_start: a parked car in view from the first frame cannot be
+// judged in the pass's first baseline (9 frames), and is kept out of the founding
+// keyframe. Judged still at the baseline's end, the start is tracked again with it: from
+// the first frame it is judged still and mapped, in a first pass and in a second on the
+// first's long-term map alike.
+TEST(FramePipelineTest, StillInstanceInViewFromTheStartIsTrackedThereOnceJudged) {
+  constexpr int kCarCategory = 3, kFrames = 14, kBaselineFrames = 9;
+  const PinholeCamera camera = PinholeCamera::FromVerticalFov(640, 480, 50);
+  ASSERT_NEAR(FramePipelineOptions().tracker.motion_baseline_s, kBaselineFrames / 30.0, 1e-9);
+  const OneInstanceScene scene(camera, kFrames, [](int) { return Volume{{1.5, -1.7, 0.0}, {3.9, -0.2, 1.4}}; });
+  const PassOutcome as_it_came = RunPass(camera, scene, kCarCategory, /*retrack_map_start=*/false);
+  const PassOutcome retracked = RunPass(camera, scene, kCarCategory, /*retrack_map_start=*/true);
+  const PassOutcome second_pass = RunPass(camera, scene, kCarCategory, true, &retracked.long_term);
+  for (const PassOutcome* pass : {&as_it_came, &retracked, &second_pass}) {
+    ASSERT_EQ(pass->frames.size(), static_cast<size_t>(kFrames));
+    EXPECT_EQ(pass->trajectory_size, static_cast<size_t>(kFrames));
+    for (int i = 0; i < kFrames; ++i) {
+      const slam::FrameResult& frame = pass->frames[static_cast<size_t>(i)];
+      ASSERT_TRUE(frame.localized()) << "frame " << i;
+      EXPECT_EQ(frame.retracked, pass != &as_it_came && i <= kBaselineFrames) << "frame " << i;
+      EXPECT_LT(PositionErrorM(frame.T_wc, SwayingPose(i)), 0.01) << "frame " << i;
+      ASSERT_EQ(frame.instances.size(), 1u) << "frame " << i;
+      const slam::InstanceJudgement& car = frame.instances[0];
+      const bool judged_in_hindsight = pass != &as_it_came;
+      if (i < kBaselineFrames) {
+        EXPECT_EQ(car.judged, judged_in_hindsight) << "frame " << i;
+      }
+      if (car.judged) {
+        EXPECT_FALSE(car.moving) << "frame " << i;
+      }
+    }
+  }
+  // Without hindsight the car is mapped on its verdict, as a keyframe then would have made it.
+  EXPECT_EQ(as_it_came.instance_points_from_the_first_frame, 0);
+  EXPECT_GT(retracked.instance_points_from_the_first_frame, 20);
+  EXPECT_GT(second_pass.instance_points_from_the_first_frame, 20);
+  for (const slam::FrameResult& frame : second_pass.frames) {
+    EXPECT_GT(frame.num_long_term_inliers, 0) << "frame " << frame.frame_index << ": not on the loaded map";
+  }
+}
+
+// Nothing judged still at the start's end, nothing is tracked again: a person walking
+// away from the first frame leaves every pose as it was.
+TEST(FramePipelineTest, StartWithOnlyAWalkerInViewIsNotTrackedAgain) {
+  constexpr int kFrames = 14;
+  const PinholeCamera camera = PinholeCamera::FromVerticalFov(640, 480, 50);
+  const OneInstanceScene scene(camera, kFrames, [](int i) {
+    const double x = -0.8 + 1.5 * i / 30.0;
+    return Volume{{x, 0.1, 0.0}, {x + 0.4, 0.7, 1.8}};
+  });
+  const PassOutcome as_it_came = RunPass(camera, scene, kPersonCategory, /*retrack_map_start=*/false);
+  const PassOutcome hindsight = RunPass(camera, scene, kPersonCategory, /*retrack_map_start=*/true);
+  ASSERT_EQ(hindsight.frames.size(), as_it_came.frames.size());
+  int judged_moving = 0;
+  for (size_t i = 0; i < hindsight.frames.size(); ++i) {
+    EXPECT_FALSE(hindsight.frames[i].retracked) << "frame " << i;
+    EXPECT_TRUE(hindsight.frames[i].T_wc.isApprox(as_it_came.frames[i].T_wc, 1e-12)) << "frame " << i;
+    for (const slam::InstanceJudgement& walker : hindsight.frames[i].instances) judged_moving += walker.moving;
+  }
+  EXPECT_GT(judged_moving, kFrames / 2);
+  EXPECT_EQ(hindsight.instance_points_from_the_first_frame, 0);
 }
 
 TEST(MutualLoopTest, InvalidRefinerOptionsAreAnError) {

@@ -837,6 +837,61 @@ TEST(TrackerTest, OracleTakesTheGivenVerdictsOverWhatItMeasures) {
   EXPECT_GT(sliding_points, 0u) << "the box said to stand was not mapped";
 }
 
+// Verdicts given in hindsight (PresetStartVerdicts, used by the frame pipeline to track
+// a pass's start again): they judge an instance its own evidence has not judged yet, on
+// frames before their end only; its own verdict wins over them.
+TEST(TrackerTest, PresetStartVerdictsJudgeOnlyWhatItsOwnEvidenceHasNotYetAndOnlyUntilTheirEnd) {
+  const PinholeCamera camera = TestCamera();
+  FrameInstances instances;
+  instances.moveable_ids = {1, 2};
+  const auto judgement_of = [](const FrameResult& result, std::uint16_t id) -> std::optional<InstanceJudgement> {
+    for (const InstanceJudgement& judgement : result.instances) {
+      if (judgement.id == id) return judgement;
+    }
+    return std::nullopt;
+  };
+  // Until frame 3: the still box is judged still from the first frame; after that, until
+  // its first full baseline (frame 9), it waits for its own verdict as without them.
+  {
+    Tracker tracker(camera, StartingAt(HandHeldPathPose(0)));
+    tracker.PresetStartVerdicts({{2, false}}, 3 / 30.0 - 1e-6);
+    for (int i = 0; i < 8; ++i) {
+      const auto rendered = RenderSlidingAndStillBox(camera, i);
+      instances.ids = rendered.instance_ids;
+      const FrameResult result = TrackJudging(tracker, rendered.frame, instances);
+      ASSERT_TRUE(result.localized()) << "frame " << i;
+      const auto still = judgement_of(result, 2);
+      ASSERT_TRUE(still.has_value()) << "frame " << i;
+      EXPECT_EQ(still->judged, i < 3) << "frame " << i;
+      if (still->judged) {
+        EXPECT_FALSE(still->moving) << "frame " << i;
+      }
+    }
+  }
+  // Told wrongly that the sliding box stands still, its own evidence judges it moving.
+  {
+    Tracker tracker(camera, StartingAt(HandHeldPathPose(0)));
+    tracker.PresetStartVerdicts({{1, false}, {2, false}}, 1.0);
+    int preset_still = 0, judged_moving = 0;
+    for (int i = 0; i < 20; ++i) {
+      const auto rendered = RenderSlidingAndStillBox(camera, i);
+      instances.ids = rendered.instance_ids;
+      const FrameResult result = TrackJudging(tracker, rendered.frame, instances);
+      const auto sliding = judgement_of(result, 1);
+      if (!sliding.has_value()) continue;
+      EXPECT_TRUE(sliding->judged) << "frame " << i << ": the preset judges what its own evidence does not";
+      (sliding->moving ? judged_moving : preset_still) += 1;
+    }
+    EXPECT_GE(judged_moving, 15);
+    EXPECT_GE(preset_still, 1) << "the sliding box was never preset still: the test shows nothing";
+    for (const auto& point : tracker.map().points()) {
+      if (!point->bad) {
+        EXPECT_NE(point->instance_id, 1) << "a point of the sliding box is in the map";
+      }
+    }
+  }
+}
+
 // A pan from the back wall of the room (x = 4 m, the only thing in view at 3 m) to the
 // side wall at y = +3 m, over two seconds.
 Eigen::Isometry3d PanToSideWallPose(int frame) {
