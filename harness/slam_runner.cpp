@@ -198,6 +198,7 @@ void WriteFrameLog(const fs::path& path, const std::vector<slam::FrameResult>& f
     line["status"] = slam::ToString(frame.status);
     line["keyframe"] = frame.keyframe;
     line["map_reset"] = frame.map_reset;
+    line["retracked"] = frame.retracked;
     line["features"] = frame.num_features;
     line["features_with_depth"] = frame.num_features_with_depth;
     line["coarse_inliers"] = frame.num_coarse_inliers;

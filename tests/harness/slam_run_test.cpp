@@ -449,6 +449,7 @@ TEST(SlamRunTest, FramesTrackedInADroppedMapCountAsLost) {
   for (int i = 0; std::getline(in, line); ++i) {
     const nlohmann::json parsed = nlohmann::json::parse(line);
     EXPECT_EQ(parsed.at("map_reset").get<bool>(), i == reset) << "line " << i;
+    EXPECT_FALSE(parsed.at("retracked").get<bool>()) << "line " << i << ": plain judges nothing in hindsight";
     if (i < 2) {
       EXPECT_EQ(parsed.at("status").get<std::string>(), "lost") << "line " << i;
     }
