@@ -94,7 +94,9 @@ class FramePipeline {
   void LoadLongTermMap(const slam::LongTermMapData& map, const std::string& origin);
 
   // One frame (see the file comment). Throws segslam::Error on a frame or masks of the
-  // wrong type or size (from the tracker, segmenter or refiner).
+  // wrong type or size (from the tracker, segmenter or refiner). Where the pass's start is
+  // tracked again, the steps returned for its earlier frames hold their first tries:
+  // frames() holds what counts.
   FrameStep ProcessFrame(const RgbdFrame& frame);
 
   // Every frame processed so far, the frames before a map reset marked lost.
