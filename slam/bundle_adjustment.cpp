@@ -28,7 +28,7 @@ constexpr int kMaxFreeKeyframesForDenseSchur = 40;
 void ValidateInput(const PinholeCamera& camera, const std::vector<BaKeyframe>& keyframes,
                    const std::vector<Eigen::Vector3d>& points_w,
                    const std::vector<BaObservation>& observations,
-                   const BundleAdjustmentOptions& options) {
+                   const BundleAdjustmentOptions& options, const std::vector<bool>& constant_points) {
   std::string reason;
   if (!camera.IsValid(&reason)) throw Error("RunBundleAdjustment: invalid camera: " + reason);
   if (options.first_iterations < 0 || options.second_iterations < 0 || options.threads < 1) {
@@ -43,6 +43,10 @@ void ValidateInput(const PinholeCamera& camera, const std::vector<BaKeyframe>& k
     if (!keyframes[k].T_cw.matrix().allFinite()) {
       throw Error(fmt::format("RunBundleAdjustment: keyframe {} pose is not finite", k));
     }
+  }
+  if (!constant_points.empty() && constant_points.size() != points_w.size()) {
+    throw Error(fmt::format("RunBundleAdjustment: {} constant-point flags for {} points", constant_points.size(),
+                            points_w.size()));
   }
   for (size_t p = 0; p < points_w.size(); ++p) {
     if (!points_w[p].allFinite()) {
@@ -81,9 +85,10 @@ class BundleAdjuster {
   BundleAdjuster(const PinholeCamera& camera, const std::vector<BaKeyframe>& keyframes,
                  const std::vector<Eigen::Vector3d>& points_w,
                  const std::vector<BaObservation>& observations,
-                 const BundleAdjustmentOptions& options)
+                 const BundleAdjustmentOptions& options, const std::vector<bool>& constant_points)
       : model_(StereoCameraModel::From(camera, options.bf)),
         keyframes_(keyframes),
+        constant_points_(constant_points),
         observations_(observations),
         options_(options),
         huber_mono_(std::sqrt(options.chi2_mono)),
@@ -190,6 +195,7 @@ class BundleAdjuster {
       if (!point_added[o.point]) {
         point_added[o.point] = true;
         problem.AddParameterBlock(point, 3);
+        if (!constant_points_.empty() && constant_points_[o.point]) problem.SetParameterBlockConstant(point);
         // Points first: the Schur complement eliminates them, leaving the small pose system.
         ordering->AddElementToGroup(point, 0);
       }
@@ -214,6 +220,7 @@ class BundleAdjuster {
 
   const StereoCameraModel model_;
   const std::vector<BaKeyframe>& keyframes_;
+  const std::vector<bool>& constant_points_;  // empty: none
   const std::vector<BaObservation>& observations_;
   const BundleAdjustmentOptions& options_;
   ceres::HuberLoss huber_mono_;
@@ -230,9 +237,10 @@ BundleAdjustmentResult RunBundleAdjustment(const PinholeCamera& camera,
                                            const std::vector<BaKeyframe>& keyframes,
                                            const std::vector<Eigen::Vector3d>& points_w,
                                            const std::vector<BaObservation>& observations,
-                                           const BundleAdjustmentOptions& options) {
-  ValidateInput(camera, keyframes, points_w, observations, options);
-  return BundleAdjuster(camera, keyframes, points_w, observations, options).Run();
+                                           const BundleAdjustmentOptions& options,
+                                           const std::vector<bool>& constant_points) {
+  ValidateInput(camera, keyframes, points_w, observations, options, constant_points);
+  return BundleAdjuster(camera, keyframes, points_w, observations, options, constant_points).Run();
 }
 
 }  // namespace segslam::slam

@@ -53,11 +53,15 @@ struct BundleAdjustmentResult {
 // first. Bit-for-bit deterministic with threads = 1 (Ceres's multi-threaded Schur
 // elimination may sum in a different order from run to run). Throws segslam::Error for an invalid
 // camera, out-of-range indices, non-finite input, information <= 0, negative iteration
-// counts, threads < 1, or stereo observations with bf <= 0.
+// counts, threads < 1, stereo observations with bf <= 0, or constant_points of another
+// size than points_w.
+// constant_points: per point, true holds it where it is (a loaded long-term map's point:
+// it anchors the keyframes and is returned bit for bit); empty: every point is free.
 BundleAdjustmentResult RunBundleAdjustment(const PinholeCamera& camera,
                                            const std::vector<BaKeyframe>& keyframes,
                                            const std::vector<Eigen::Vector3d>& points_w,
                                            const std::vector<BaObservation>& observations,
-                                           const BundleAdjustmentOptions& options = {});
+                                           const BundleAdjustmentOptions& options = {},
+                                           const std::vector<bool>& constant_points = {});
 
 }  // namespace segslam::slam

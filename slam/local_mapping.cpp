@@ -114,7 +114,7 @@ void Tracker::Impl::CreateKeyframe() {
   // Culling runs in localization too: the loaded map's points are fixed and never
   // culled, and the tracking map's new points need it as much as a mapping run's.
   CullRecentPoints(keyframe);
-  if (!localization_mode) {
+  if (!localization_mode || options.localization_bundle_adjustment) {
     if (options.local_bundle_adjustment) {
       const Clock::time_point start = Clock::now();
       LocalBundleAdjustment();
@@ -159,7 +159,10 @@ Tracker::Impl::LocalBaProblem Tracker::Impl::MakeLocalBaProblem(const std::vecto
   std::set<std::uint64_t> seen;
   for (Keyframe* keyframe : window) {
     for (MapPoint* point : keyframe->points) {
-      if (point == nullptr || point->bad || point->fixed || !seen.insert(point->id).second) continue;
+      // A loaded map's points take part only in localization, held where they are: they
+      // anchor the window to the map they were loaded from.
+      if (point == nullptr || point->bad || !seen.insert(point->id).second) continue;
+      if (point->fixed && !localization_mode) continue;
       problem.points.push_back(point);
     }
   }
@@ -183,6 +186,7 @@ Tracker::Impl::LocalBaProblem Tracker::Impl::MakeLocalBaProblem(const std::vecto
   for (size_t p = 0; p < problem.points.size(); ++p) {
     MapPoint* point = problem.points[p];
     problem.positions.push_back(point->position_w);
+    problem.constant.push_back(point->fixed);
     for (const auto& [keyframe, feature] : point->observations) {
       const cv::KeyPoint& kp = keyframe->features.keypoints[static_cast<size_t>(feature)];
       BaObservation observation;
@@ -199,14 +203,16 @@ Tracker::Impl::LocalBaProblem Tracker::Impl::MakeLocalBaProblem(const std::vecto
   return problem;
 }
 
-// Moves the free keyframes and the points to the adjusted values and unlinks the
+// Moves the free keyframes and points to the adjusted values and unlinks the
 // observations the adjustment found to be outliers (a point left unobserved is bad).
 void Tracker::Impl::ApplyLocalBa(const LocalBaProblem& problem, const BundleAdjustmentResult& adjusted) {
   for (const auto& [keyframe, index] : problem.keyframe_index) {
     if (!problem.keyframes[static_cast<size_t>(index)].fixed)
       keyframe->T_cw = adjusted.T_cw[static_cast<size_t>(index)];
   }
-  for (size_t p = 0; p < problem.points.size(); ++p) problem.points[p]->position_w = adjusted.points_w[p];
+  for (size_t p = 0; p < problem.points.size(); ++p) {
+    if (!problem.constant[p]) problem.points[p]->position_w = adjusted.points_w[p];
+  }
   for (size_t k = 0; k < problem.observations.size(); ++k) {
     if (adjusted.observation_inlier[k]) continue;
     auto [point, keyframe] = problem.observation_owner[k];
@@ -216,10 +222,11 @@ void Tracker::Impl::ApplyLocalBa(const LocalBaProblem& problem, const BundleAdju
       keyframe->points[static_cast<size_t>(found->second)] = nullptr;
     }
     point->observations.erase(found);
-    if (point->observations.empty()) Map::MarkBad(point);
+    // A loaded point is never culled: its observations are in the map it came from.
+    if (point->observations.empty() && !point->fixed) Map::MarkBad(point);
   }
   for (MapPoint* point : problem.points) {
-    if (!point->bad) Map::UpdatePointStatistics(point, extractor);
+    if (!point->bad && !point->fixed) Map::UpdatePointStatistics(point, extractor);
   }
 }
 
@@ -232,7 +239,8 @@ void Tracker::Impl::LocalBundleAdjustment() {
   ba_options.bf = bf;
   ba_options.threads = 1;
   ApplyLocalBa(problem,
-               RunBundleAdjustment(camera, problem.keyframes, problem.positions, problem.observations, ba_options));
+               RunBundleAdjustment(camera, problem.keyframes, problem.positions, problem.observations, ba_options,
+                                       problem.constant));
   // The current frame's pose moves with its keyframe.
   current.T_cw = reference_keyframe->T_cw;
 }

@@ -245,6 +245,11 @@ struct TrackerOptions {
   // Local bundle adjustment over the latest keyframes.
   bool local_bundle_adjustment = true;
   int local_ba_keyframes = 7;
+  // In localization too (a run on a loaded long-term map), with the loaded map's points
+  // held where they are: they anchor the run's keyframes, and the run's own points, which
+  // carry its tracking wherever the loaded map is thin (what a judging mode left out of
+  // it: every moveable object), are refined as a mapping run's are.
+  bool localization_bundle_adjustment = true;
   // The robust pose optimisation of every tracking stage and the local bundle
   // adjustment; their `bf` is set from depth_sigma_at_1m, and the adjustment runs on one
   // thread (Ceres's threads would sum in another order each run).

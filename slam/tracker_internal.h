@@ -511,6 +511,7 @@ struct Tracker::Impl {
     std::vector<BaKeyframe> keyframes;
     std::vector<MapPoint*> points;  // ascending id
     std::vector<Eigen::Vector3d> positions;  // of `points`
+    std::vector<bool> constant;              // of `points`: a loaded map's, held fixed
     std::vector<BaObservation> observations;
     std::vector<std::pair<MapPoint*, Keyframe*>> observation_owner;  // of `observations`
   };

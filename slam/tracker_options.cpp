@@ -43,6 +43,7 @@ const OptionRegistry<TrackerOptions>& TrackerOptionRegistry() {
       REAL(close_depth_m, AtLeast(0), "m", "depth of a close point in keyframe decisions (0: from the first frame)"),
       SWITCH(local_bundle_adjustment, "local bundle adjustment after each keyframe"),
       WHOLE(local_ba_keyframes, AtLeast(1), "", "keyframes the local bundle adjustment moves"),
+      SWITCH(localization_bundle_adjustment, "localization: local bundle adjustment too, the loaded map's points held fixed"),
       // The moving/static judgement (the paper's step 3).
       REAL(moving_distance_m, AtLeast(0), "m", "a feature moves when its 3-D position is off by more than this (plus per-metre part)"),
       REAL(moving_distance_per_m, AtLeast(0), "m/m", "a feature moves when off by moving_distance_m plus this times its depth"),

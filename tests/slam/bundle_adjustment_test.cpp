@@ -193,6 +193,50 @@ TEST(BundleAdjustmentTest, AllKeyframesFixedRefinesPointsOnly) {
   }
 }
 
+// A loaded map's points held constant anchor keyframes that are all free: the constant
+// points come back bit for bit, and the keyframes and the free points come back to the
+// truth the constant points were placed at (without them, nothing fixes the gauge).
+TEST(BundleAdjustmentTest, ConstantPointsAnchorFreeKeyframesAndStayWhereTheyAre) {
+  const Scene scene = MakeScene(6, 240, 7);
+  Start start = PerturbedStart(scene, 17, /*num_fixed=*/0);
+  std::vector<bool> constant(scene.points_true.size());
+  for (size_t p = 0; p < constant.size(); ++p) {
+    constant[p] = p % 3 == 0;
+    if (constant[p]) start.points[p] = scene.points_true[p];
+  }
+  const BundleAdjustmentResult r = RunBundleAdjustment(TestCamera(), start.keyframes, start.points,
+                                                       scene.observations, Options(), constant);
+  for (size_t p = 0; p < constant.size(); ++p) {
+    if (constant[p]) EXPECT_TRUE(r.points_w[p] == start.points[p]) << "constant point " << p;
+  }
+  for (int k = 0; k < 6; ++k) {
+    EXPECT_LT(CentreError(r.T_cw[k], scene.T_cw_true[k]), 1e-4) << "keyframe " << k;
+    EXPECT_LT(RotationErrorDeg(r.T_cw[k], scene.T_cw_true[k]), 1e-3) << "keyframe " << k;
+  }
+  const std::vector<bool> determined = scene.Determined();
+  int free_checked = 0;
+  for (size_t p = 0; p < scene.points_true.size(); ++p) {
+    if (constant[p] || !determined[p]) continue;
+    EXPECT_LT((r.points_w[p] - scene.points_true[p]).norm(), 1e-4) << "free point " << p;
+    ++free_checked;
+  }
+  EXPECT_GT(free_checked, 100);
+}
+
+// Every point constant: each keyframe is a pose fitted to fixed points, as localization's.
+TEST(BundleAdjustmentTest, AllPointsConstantRefinesKeyframesOnly) {
+  const Scene scene = MakeScene(4, 150, 8);
+  const Start start = PerturbedStart(scene, 18, /*num_fixed=*/0);
+  const std::vector<bool> constant(scene.points_true.size(), true);
+  const BundleAdjustmentResult r = RunBundleAdjustment(TestCamera(), start.keyframes, scene.points_true,
+                                                       scene.observations, Options(), constant);
+  for (size_t p = 0; p < scene.points_true.size(); ++p) EXPECT_TRUE(r.points_w[p] == scene.points_true[p]);
+  for (int k = 0; k < 4; ++k) {
+    EXPECT_LT(CentreError(r.T_cw[k], scene.T_cw_true[k]), 1e-4) << "keyframe " << k;
+    EXPECT_LT(RotationErrorDeg(r.T_cw[k], scene.T_cw_true[k]), 1e-3) << "keyframe " << k;
+  }
+}
+
 TEST(BundleAdjustmentTest, IsDeterministicAndKeepsUnobservedPoints) {
   const Scene scene = MakeScene(6, 150, 5);
   Start start = PerturbedStart(scene, 15);
@@ -236,6 +280,10 @@ TEST(BundleAdjustmentTest, RejectsInvalidInput) {
   bad = scene.observations;
   bad[1].information = -1;
   EXPECT_THROW(RunBundleAdjustment(TestCamera(), start.keyframes, start.points, bad, Options()),
+               Error);
+  const std::vector<bool> too_few_flags(start.points.size() - 1, true);
+  EXPECT_THROW(RunBundleAdjustment(TestCamera(), start.keyframes, start.points, scene.observations, Options(),
+                                   too_few_flags),
                Error);
 }
 

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <map>
 #include <optional>
 #include <random>
@@ -410,6 +411,78 @@ TEST(TrackerTest, LocalizationCullsItsNewPoints) {
     }
   }
   EXPECT_GT(new_points, 0);
+}
+
+// Distance from p to the nearest of the quads, each taken within its edges.
+double DistanceToSurfaces(const std::vector<testing::TexturedQuad>& quads, const Eigen::Vector3d& p) {
+  double nearest = std::numeric_limits<double>::infinity();
+  for (const testing::TexturedQuad& quad : quads) {
+    const Eigen::Vector3d d = p - quad.origin;
+    const double a = std::clamp(d.dot(quad.u) / quad.u.squaredNorm(), 0.0, 1.0);
+    const double b = std::clamp(d.dot(quad.v) / quad.v.squaredNorm(), 0.0, 1.0);
+    nearest = std::min(nearest, (quad.origin + a * quad.u + b * quad.v - p).norm());
+  }
+  return nearest;
+}
+
+// Where the loaded map is thin (a judging mode leaves every moveable object out of it),
+// a localization run tracks on its own points, made from one frame's noisy depth. Local
+// bundle adjustment against the loaded points, held where they are, brings those points
+// onto the surfaces they lie on; the loaded points stay as loaded.
+TEST(TrackerTest, LocalizationBundleAdjustmentRefinesItsOwnPointsAndKeepsTheLoadedOnes) {
+  const PinholeCamera camera = TestCamera();
+  const auto room = RoomQuads(4);
+  const LongTermMapData full = MapOfFirstVisit(camera, room, /*include_instances=*/true);
+  LongTermMapData thin = full;
+  thin.points.clear();
+  for (size_t k = 0; k < full.points.size(); k += 4) thin.points.push_back(full.points[k]);
+  ASSERT_GT(thin.points.size(), 100u);
+
+  // Median distance of the run's own points to the room's surfaces.
+  auto own_points_off_surface = [&](bool adjust) {
+    TrackerOptions options;
+    options.localization_bundle_adjustment = adjust;
+    Tracker localizer(camera, options);
+    localizer.LoadLongTermMap(thin, "thin map");
+    std::mt19937 rng(5);
+    std::normal_distribution<float> unit(0.0f, 1.0f);
+    int keyframes = 0;
+    for (int i = 0; i < 45; ++i) {
+      const Eigen::Isometry3d truth = Eigen::Translation3d(0, 0.1, 0) * HandHeldPathPose(44 - i);
+      RenderedFrame rendered = RenderQuads(room, camera, truth, i, i / 30.0);
+      // A Kinect's depth noise: 1.5 mm at 1 m, growing with the square of the depth
+      // (drawn in pixel order: cv::Mat::forEach would draw from threads).
+      cv::Mat& depth = rendered.frame.depth_m;
+      for (int row = 0; row < depth.rows; ++row) {
+        for (int col = 0; col < depth.cols; ++col) {
+          float& z = depth.at<float>(row, col);
+          if (z > 0) z += 0.0015f * z * z * unit(rng);
+        }
+      }
+      const FrameResult result = TrackPlain(localizer, rendered.frame);
+      EXPECT_TRUE(result.localized()) << "frame " << i;
+      keyframes += result.keyframe;
+    }
+    EXPECT_GE(keyframes, 3);
+    std::vector<double> distances;
+    for (const auto& point : localizer.map().points()) {
+      if (!point->bad && !point->fixed) distances.push_back(DistanceToSurfaces(room, point->position_w));
+    }
+    EXPECT_EQ(localizer.ExportLongTermMap(true).points.size(), thin.points.size());
+    for (const auto& point : localizer.map().points()) {
+      if (!point->fixed) continue;
+      const auto loaded = std::find_if(thin.points.begin(), thin.points.end(),
+                                       [&](const StoredMapPoint& p) { return p.descriptor == point->descriptor; });
+      EXPECT_TRUE(loaded != thin.points.end() && loaded->position_w == point->position_w)
+          << "loaded point " << point->id << " moved";
+    }
+    EXPECT_GT(distances.size(), 100u);
+    std::nth_element(distances.begin(), distances.begin() + distances.size() / 2, distances.end());
+    return distances[distances.size() / 2];
+  };
+  const double adjusted = own_points_off_surface(true);
+  const double as_made = own_points_off_surface(false);
+  EXPECT_LT(adjusted, 0.85 * as_made) << "adjusted " << adjusted << " m, as made " << as_made << " m";
 }
 
 TEST(TrackerTest, MapFromAnotherCameraIsRefused) {
