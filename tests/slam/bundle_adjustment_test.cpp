@@ -207,7 +207,9 @@ TEST(BundleAdjustmentTest, ConstantPointsAnchorFreeKeyframesAndStayWhereTheyAre)
   const BundleAdjustmentResult r = RunBundleAdjustment(TestCamera(), start.keyframes, start.points,
                                                        scene.observations, Options(), constant);
   for (size_t p = 0; p < constant.size(); ++p) {
-    if (constant[p]) EXPECT_TRUE(r.points_w[p] == start.points[p]) << "constant point " << p;
+    if (constant[p]) {
+      EXPECT_TRUE(r.points_w[p] == start.points[p]) << "constant point " << p;
+    }
   }
   for (int k = 0; k < 6; ++k) {
     EXPECT_LT(CentreError(r.T_cw[k], scene.T_cw_true[k]), 1e-4) << "keyframe " << k;
